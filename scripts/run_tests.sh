@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The test command: installs the Debian packages that are missing, builds grid_vision_fusion in
+# a catkin workspace, runs every test (gtest, rostest, launch-file checks) and prints
+# `N passed, M failed` last. Exits non-zero when a build step or any test fails.
+#
+# Usage: scripts/run_tests.sh            (workspace in .workspace/ of the repository)
+#        GVF_WORKSPACE=/path scripts/run_tests.sh
+set -uo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+workspace=${GVF_WORKSPACE:-$root/.workspace}
+jobs=${GVF_JOBS:-$(nproc)}
+# Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
+export PATH=/usr/bin:/bin:$PATH
+
+fail() {
+  echo "[run_tests] $1" >&2
+  echo "0 passed, 1 failed"
+  exit 1
+}
+
+"$root/scripts/install_deps.sh" || fail "installing the Debian packages failed"
+
+mkdir -p "$workspace/src" || fail "cannot create the workspace $workspace"
+ln -sfn "$root" "$workspace/src/grid_vision_fusion"
+cd "$workspace" || fail "cannot enter $workspace"
+
+# shellcheck disable=SC1091
+source /opt/ros/noetic/setup.bash 2>/dev/null || true
+echo "[run_tests] building in $workspace (catkin_make, $jobs jobs)"
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$jobs" ||
+  fail "catkin_make failed"
+catkin_make tests -j"$jobs" || fail "building the tests failed"
+
+# shellcheck disable=SC1091
+source "$workspace/devel/setup.bash"
+rm -rf "$workspace/build/test_results"
+echo "[run_tests] running the tests"
+# run_tests exits 0 even when tests fail: the verdict comes from the result files below.
+catkin_make run_tests -j"$jobs"
+catkin_test_results "$workspace/build/test_results" || true
+python3 "$root/scripts/summarize_test_results.py" "$workspace/build/test_results"

@@ -1,0 +1,302 @@
+// grid_vision_fusion/fusion: detector boxes + projected grid -> DetectedObjectArray.
+#include <boost/make_shared.hpp>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <dynamic_reconfigure/server.h>
+#include <image_transport/image_transport.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <deque>
+#include <memory>
+#include <mutex>
+
+#include "grid_vision_fusion/Detection2DArray.h"
+#include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/FusionReconfigureConfig.h"
+#include "grid_vision_fusion/ProjectedGrid.h"
+#include "grid_vision_fusion/core/fusion.h"
+#include "grid_vision_fusion/core/overlay.h"
+#include "grid_vision_fusion/ros/fusion_conversions.h"
+#include "grid_vision_fusion/ros/params.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kThrottleS = 5.0;
+}  // namespace
+
+class FusionNodelet : public nodelet::Nodelet
+{
+  using ExactPolicy = message_filters::sync_policies::ExactTime<Detection2DArray, ProjectedGrid>;
+  using ApproximatePolicy =
+      message_filters::sync_policies::ApproximateTime<Detection2DArray, ProjectedGrid>;
+  using ReconfigureServer = dynamic_reconfigure::Server<FusionReconfigureConfig>;
+
+  void onInit() override;
+  void connectCb();
+  void fusionCb(const Detection2DArray::ConstPtr& detections_msg,
+                const ProjectedGrid::ConstPtr& grid_msg);
+  void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
+  void reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t level);
+  void publishOverlay(const Detection2DArray& detections_msg, const std::vector<Detection>& detections,
+                      const FusionResult& result, const ProjectedPointsView& points,
+                      const FusionConfig& config);
+
+  boost::mutex connect_mutex_;
+  std::mutex config_mutex_;
+  FusionConfig config_;
+  bool lazy_ = true;
+  int queue_size_ = 10;
+  int image_cache_size_ = 10;
+
+  std::unique_ptr<image_transport::ImageTransport> it_;
+  message_filters::Subscriber<Detection2DArray> sub_detections_;
+  message_filters::Subscriber<ProjectedGrid> sub_grid_;
+  std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
+  std::unique_ptr<message_filters::Synchronizer<ApproximatePolicy>> approximate_sync_;
+  image_transport::Subscriber sub_image_;
+  std::mutex image_mutex_;
+  std::deque<sensor_msgs::Image::ConstPtr> image_cache_;
+
+  ros::Publisher pub_objects_;
+  ros::Publisher pub_markers_;
+  image_transport::Publisher pub_image_;
+  std::unique_ptr<ReconfigureServer> reconfigure_server_;
+};
+
+void FusionNodelet::onInit()
+{
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+
+  bool approximate_sync = false;
+  try
+  {
+    config_ = fusionConfigFromParams(pnh);
+    readParam(pnh, "lazy", lazy_);
+    readParam(pnh, "approximate_sync", approximate_sync);
+    readParam(pnh, "queue_size", queue_size_);
+    readParam(pnh, "image_cache_size", image_cache_size_);
+    if (queue_size_ < 1)
+    {
+      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
+    }
+    if (image_cache_size_ < 1)
+    {
+      throw std::invalid_argument("parameter ~image_cache_size must be >= 1, got " +
+                                  std::to_string(image_cache_size_));
+    }
+  }
+  catch (const std::exception& e)
+  {
+    NODELET_ERROR("fusion: invalid configuration, the nodelet stays inactive: %s", e.what());
+    return;
+  }
+
+  reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
+  reconfigure_server_->setCallback(
+      boost::bind(&FusionNodelet::reconfigureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+
+  if (approximate_sync)
+  {
+    approximate_sync_ = std::make_unique<message_filters::Synchronizer<ApproximatePolicy>>(
+        ApproximatePolicy(queue_size_), sub_detections_, sub_grid_);
+    approximate_sync_->registerCallback(
+        boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
+  }
+  else
+  {
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
+        ExactPolicy(queue_size_), sub_detections_, sub_grid_);
+    exact_sync_->registerCallback(
+        boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
+  }
+
+  it_ = std::make_unique<image_transport::ImageTransport>(nh);
+  ros::SubscriberStatusCallback connect_cb = boost::bind(&FusionNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&FusionNodelet::connectCb, this);
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  pub_objects_ = nh.advertise<DetectedObjectArray>("objects", 1, connect_cb, connect_cb);
+  pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("objects/markers", 1, connect_cb, connect_cb);
+  pub_image_ = it_->advertise("objects/image", 1, image_connect_cb, image_connect_cb);
+  if (!lazy_)
+  {
+    // connectCb takes the lock itself; subscribe without it here.
+    sub_detections_.subscribe(nh, "detections", queue_size_);
+    sub_grid_.subscribe(nh, "projected_grid", queue_size_);
+    sub_image_ = it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(), pnh));
+  }
+  NODELET_INFO("fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, "
+               "%s sync, %s",
+               config_.band_above, config_.band_below, config_.min_points,
+               toString(config_.tie_rule).c_str(), approximate_sync ? "approximate" : "exact",
+               lazy_ ? "lazy" : "always subscribed");
+}
+
+void FusionNodelet::connectCb()
+{
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  if (!lazy_)
+  {
+    return;
+  }
+  ros::NodeHandle& nh = getNodeHandle();
+  const bool overlay_wanted = pub_image_.getNumSubscribers() > 0;
+  const bool any_output =
+      overlay_wanted || pub_objects_.getNumSubscribers() > 0 || pub_markers_.getNumSubscribers() > 0;
+  if (!any_output)
+  {
+    sub_detections_.unsubscribe();
+    sub_grid_.unsubscribe();
+  }
+  else if (!sub_detections_.getSubscriber())
+  {
+    sub_detections_.subscribe(nh, "detections", queue_size_);
+    sub_grid_.subscribe(nh, "projected_grid", queue_size_);
+  }
+  if (!overlay_wanted)
+  {
+    sub_image_.shutdown();
+    std::lock_guard<std::mutex> image_lock(image_mutex_);
+    image_cache_.clear();
+  }
+  else if (!sub_image_)
+  {
+    sub_image_ = it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(),
+                                                                getPrivateNodeHandle()));
+  }
+}
+
+void FusionNodelet::reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t /*level*/)
+{
+  FusionConfig updated;
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    updated = config_;
+  }
+  updated.band_above = reconfigure.band_above;
+  updated.band_below = reconfigure.band_below;
+  updated.min_points = reconfigure.min_points;
+  try
+  {
+    updated.validate();
+  }
+  catch (const std::invalid_argument& e)
+  {
+    NODELET_ERROR("fusion: reconfiguration refused: %s", e.what());
+    return;
+  }
+  std::lock_guard<std::mutex> lock(config_mutex_);
+  config_ = updated;
+}
+
+void FusionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
+{
+  std::lock_guard<std::mutex> lock(image_mutex_);
+  image_cache_.push_back(image_msg);
+  while (image_cache_.size() > static_cast<std::size_t>(image_cache_size_))
+  {
+    image_cache_.pop_front();
+  }
+}
+
+void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
+                             const ProjectedGrid::ConstPtr& grid_msg)
+{
+  const std::string grid_error = checkProjectedGrid(*grid_msg);
+  if (!grid_error.empty())
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f: topic %s: %s",
+                          grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(),
+                          grid_error.c_str());
+    return;
+  }
+  const std::vector<Detection> detections = detectionsFromMsg(*detections_msg);
+  const std::string input_error =
+      checkFusionInputs(detections, detections_msg->image_width, detections_msg->image_height,
+                        grid_msg->image_width, grid_msg->image_height);
+  if (!input_error.empty())
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f (%s + %s): %s",
+                          detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
+                          sub_grid_.getTopic().c_str(), input_error.c_str());
+    return;
+  }
+
+  FusionConfig config;
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    config = config_;
+  }
+  const ProjectedPointsView points = viewOf(*grid_msg);
+  const FusionResult result = fuse(detections, points, config);
+  if (result.invalid_points > 0)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: %zu of %zu points of %s ignored (NaN/Inf values or bad state)",
+                          result.invalid_points, points.size, sub_grid_.getTopic().c_str());
+  }
+
+  DetectedObjectArray::Ptr objects =
+      objectsToMsg(detections_msg->header, grid_msg->grid_frame_id, detections, result);
+  if (pub_markers_.getNumSubscribers() > 0)
+  {
+    pub_markers_.publish(objectsToMarkers(*objects));
+  }
+  if (pub_image_.getNumSubscribers() > 0)
+  {
+    publishOverlay(*detections_msg, detections, result, points, config);
+  }
+  pub_objects_.publish(objects);
+}
+
+void FusionNodelet::publishOverlay(const Detection2DArray& detections_msg,
+                                   const std::vector<Detection>& detections, const FusionResult& result,
+                                   const ProjectedPointsView& points, const FusionConfig& config)
+{
+  sensor_msgs::Image::ConstPtr image_msg;
+  {
+    std::lock_guard<std::mutex> lock(image_mutex_);
+    for (const auto& cached : image_cache_)
+    {
+      if (cached->header.stamp == detections_msg.header.stamp)
+      {
+        image_msg = cached;
+      }
+    }
+  }
+  if (!image_msg)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: no image on %s with stamp %.3f for the overlay",
+                          sub_image_.getTopic().c_str(), detections_msg.header.stamp.toSec());
+    return;
+  }
+  cv_bridge::CvImagePtr canvas;
+  try
+  {
+    canvas = cv_bridge::toCvCopy(image_msg, sensor_msgs::image_encodings::BGR8);
+  }
+  catch (const cv_bridge::Exception& e)
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "fusion: cannot draw on image of encoding '%s' from %s: %s",
+                           image_msg->encoding.c_str(), sub_image_.getTopic().c_str(), e.what());
+    return;
+  }
+  drawFusionOverlay(canvas->image, detections, result, points, config);
+  pub_image_.publish(canvas->toImageMsg());
+}
+
+}  // namespace grid_vision_fusion
+
+PLUGINLIB_EXPORT_CLASS(grid_vision_fusion::FusionNodelet, nodelet::Nodelet)
