@@ -5,7 +5,7 @@
 #
 # Usage: scripts/run_tests.sh            (workspace in .workspace/ of the repository)
 #        GVF_WORKSPACE=/path scripts/run_tests.sh
-set -uo pipefail
+set -o pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 workspace=${GVF_WORKSPACE:-$root/.workspace}
@@ -25,15 +25,13 @@ mkdir -p "$workspace/src" || fail "cannot create the workspace $workspace"
 ln -sfn "$root" "$workspace/src/grid_vision_fusion"
 cd "$workspace" || fail "cannot enter $workspace"
 
-# shellcheck disable=SC1091
-source /opt/ros/noetic/setup.bash 2>/dev/null || true
 echo "[run_tests] building in $workspace (catkin_make, $jobs jobs)"
 catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$jobs" ||
   fail "catkin_make failed"
 catkin_make tests -j"$jobs" || fail "building the tests failed"
 
 # shellcheck disable=SC1091
-source "$workspace/devel/setup.bash"
+source "$workspace/devel/setup.bash" || fail "cannot source $workspace/devel/setup.bash"
 rm -rf "$workspace/build/test_results"
 echo "[run_tests] running the tests"
 # run_tests exits 0 even when tests fail: the verdict comes from the result files below.

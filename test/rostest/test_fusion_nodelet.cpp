@@ -147,6 +147,24 @@ protected:
   std::vector<DetectedObjectArray::ConstPtr> received_;
 };
 
+TEST_F(FusionNodeletTest, BadParameterLeavesTheNodeletInactive)
+{
+  // The good instance advertised /objects (SetUp); the one with band_above = -1 in /bad must not
+  // advertise anything, and the manager they share must keep serving the good one.
+  ros::WallDuration(1.0).sleep();
+  ros::master::V_TopicInfo topics;
+  ASSERT_TRUE(ros::master::getTopics(topics));
+  for (const auto& t : topics)
+  {
+    EXPECT_NE(t.name.rfind("/bad/", 0), 0U) << "the misconfigured nodelet advertised " << t.name;
+  }
+  subscribeObjects();
+  const ros::Time stamp(1317000030, 0);
+  pub_detections_.publish(makeDetections(stamp));
+  pub_grid_.publish(makeGrid(stamp));
+  EXPECT_TRUE(waitFor([this] { return !received_.empty(); }, 10.0)) << "the manager stopped serving";
+}
+
 TEST_F(FusionNodeletTest, LazyWhileNobodyListens)
 {
   ros::WallDuration(0.5).sleep();
