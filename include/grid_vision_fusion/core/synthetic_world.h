@@ -73,7 +73,7 @@ struct Actor
   std::string type;  ///< KITTI type: "Car", "Van", "Truck", "Cyclist", "Pedestrian"...
   double length = 4.0, width = 1.8, height = 1.5;  ///< [m]
   Trajectory trajectory = Trajectory::parked({});
-  std::uint32_t color_bgr = 0x3050A0;  ///< body colour for the camera
+  std::uint32_t color_rgb = 0x2E5FA8;  ///< body colour for the camera, 0xRRGGBB
 
   GroundBox boxAt(double t) const;
 };
@@ -82,7 +82,7 @@ struct Actor
 struct SceneryBox
 {
   GroundBox box;
-  std::uint32_t color_bgr = 0x808080;
+  std::uint32_t color_rgb = 0x808080;  ///< 0xRRGGBB
 };
 
 /// What a ray hit.
