@@ -1,0 +1,31 @@
+# Grid-to-image projection (issue 5): KITTI calibration readers and the projection in the core,
+# DynamicGrid/CameraInfo/ProjectedGrid conversions in the ROS layer, the grid_projection nodelet,
+# its tests and its benchmark.
+target_sources(grid_vision_fusion_core PRIVATE
+  src/core/grid_projection.cpp
+  src/core/kitti_calibration.cpp)
+
+# Benchmark (Google Benchmark): built by default, never run as a test.
+find_package(benchmark QUIET)
+if(benchmark_FOUND)
+  add_executable(bench_grid_projection bench/bench_grid_projection.cpp)
+  target_link_libraries(bench_grid_projection grid_vision_fusion_core benchmark::benchmark)
+  target_compile_options(bench_grid_projection PRIVATE ${GVF_WARNINGS})
+else()
+  message(WARNING "Google Benchmark (libbenchmark-dev) not found: bench_grid_projection is not built")
+endif()
+
+if(CATKIN_ENABLE_TESTING)
+  # The main CMakeLists.txt finds these after the fragments are included.
+  find_package(rostest REQUIRED)
+  find_package(roslaunch REQUIRED)
+
+  catkin_add_gtest(test_grid_projection
+    test/core/test_grid_projection.cpp
+    test/core/test_kitti_calibration.cpp)
+  target_link_libraries(test_grid_projection grid_vision_fusion_core ${GTEST_MAIN_LIBRARIES})
+  target_compile_options(test_grid_projection PRIVATE ${GVF_WARNINGS})
+  target_compile_definitions(test_grid_projection PRIVATE
+    GVF_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data")
+
+endif()
