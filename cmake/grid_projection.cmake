@@ -4,6 +4,8 @@
 target_sources(grid_vision_fusion_core PRIVATE
   src/core/grid_projection.cpp
   src/core/kitti_calibration.cpp)
+target_sources(grid_vision_fusion_ros PRIVATE src/ros/projection_conversions.cpp)
+target_sources(grid_vision_fusion_nodelets PRIVATE src/nodelets/grid_projection_nodelet.cpp)
 
 # Benchmark (Google Benchmark): built by default, never run as a test.
 find_package(benchmark QUIET)
@@ -28,4 +30,12 @@ if(CATKIN_ENABLE_TESTING)
   target_compile_definitions(test_grid_projection PRIVATE
     GVF_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data")
 
+  add_rostest_gtest(test_grid_projection_nodelet test/rostest/grid_projection_nodelet.test
+    test/rostest/test_grid_projection_nodelet.cpp)
+  target_link_libraries(test_grid_projection_nodelet ${catkin_LIBRARIES})
+  target_compile_options(test_grid_projection_nodelet PRIVATE ${GVF_WARNINGS})
+  add_dependencies(test_grid_projection_nodelet grid_vision_fusion_nodelets
+    ${PROJECT_NAME}_generate_messages_cpp)
+
+  roslaunch_add_file_check(launch/grid_projection.launch manager:=manager)
 endif()
