@@ -1,0 +1,366 @@
+// grid_vision_fusion/grid_projection: DynamicGrid + CameraInfo (+ tf) -> ProjectedGrid, one per
+// camera_info, stamped like the image.
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2/exceptions.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
+
+#include "grid_vision_fusion/DynamicGrid.h"
+#include "grid_vision_fusion/ProjectedGrid.h"
+#include "grid_vision_fusion/core/grid_projection.h"
+#include "grid_vision_fusion/core/overlay.h"
+#include "grid_vision_fusion/ros/fusion_conversions.h"
+#include "grid_vision_fusion/ros/params.h"
+#include "grid_vision_fusion/ros/projection_conversions.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kThrottleS = 5.0;
+}  // namespace
+
+class GridProjectionNodelet : public nodelet::Nodelet
+{
+  void onInit() override;
+  void connectCb();
+  void gridCb(const DynamicGrid::ConstPtr& grid_msg);
+  void cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
+  void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
+  /// z of the ground plane in the grid frame at `stamp`; false (after a throttled warning) when
+  /// the tf grid frame ← ground_frame is missing.
+  bool groundZ(const std::string& grid_frame, const ros::Time& stamp, double& ground_z);
+  /// Publishes the overlay of the cached image and projection with equal stamps, if any.
+  void publishMatchedOverlay();
+
+  boost::mutex connect_mutex_;
+  GridProjectionConfig config_;
+  std::string ground_frame_ = "velo_link";
+  double ground_height_ = -1.73;
+  double max_grid_age_ = 0.5;
+  int image_cache_size_ = 5;
+  bool lazy_ = true;
+
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+
+  std::unique_ptr<image_transport::ImageTransport> it_;
+  ros::Subscriber sub_grid_;
+  ros::Subscriber sub_info_;
+  image_transport::Subscriber sub_image_;
+
+  std::mutex grid_mutex_;
+  DynamicGrid::ConstPtr grid_;
+
+  std::mutex overlay_mutex_;
+  std::deque<sensor_msgs::Image::ConstPtr> images_;
+  std::deque<ProjectedGrid::ConstPtr> projections_;
+
+  ros::Publisher pub_projected_;
+  image_transport::Publisher pub_image_;
+};
+
+void GridProjectionNodelet::onInit()
+{
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  try
+  {
+    config_ = gridProjectionConfigFromParams(pnh);
+    readParam(pnh, "ground_frame", ground_frame_);
+    readParam(pnh, "ground_height", ground_height_);
+    readParam(pnh, "max_grid_age", max_grid_age_);
+    readParam(pnh, "image_cache_size", image_cache_size_);
+    readParam(pnh, "lazy", lazy_);
+    if (!std::isfinite(ground_height_))
+    {
+      throw std::invalid_argument("parameter ~ground_height must be finite");
+    }
+    if (!std::isfinite(max_grid_age_) || max_grid_age_ <= 0.0)
+    {
+      throw std::invalid_argument("parameter ~max_grid_age must be finite and > 0 s, got " +
+                                  std::to_string(max_grid_age_));
+    }
+    if (image_cache_size_ < 1)
+    {
+      throw std::invalid_argument("parameter ~image_cache_size must be >= 1, got " +
+                                  std::to_string(image_cache_size_));
+    }
+  }
+  catch (const std::exception& e)
+  {
+    NODELET_ERROR("grid_projection: invalid configuration, the nodelet stays inactive: %s", e.what());
+    return;
+  }
+
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+
+  it_ = std::make_unique<image_transport::ImageTransport>(nh);
+  ros::SubscriberStatusCallback connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", 1, connect_cb, connect_cb);
+  pub_image_ = it_->advertise("projected_grid/image", 1, image_connect_cb, image_connect_cb);
+  if (!lazy_)
+  {
+    // connectCb takes the lock itself; subscribe without it here.
+    sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
+    sub_info_ = nh.subscribe("camera_info", 5, &GridProjectionNodelet::cameraInfoCb, this);
+    sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(), pnh));
+  }
+  NODELET_INFO("grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
+               "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
+               config_.occupied_threshold, config_.dynamic_ratio, ground_height_,
+               ground_frame_.empty() ? "in the grid frame" : "below/above the origin of ",
+               ground_frame_.c_str(), config_.column_mode ? "column mode" : "ground points only",
+               config_.predict_to_image_stamp ? "on" : "off", max_grid_age_, lazy_ ? "lazy" : "always subscribed");
+}
+
+void GridProjectionNodelet::connectCb()
+{
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  if (!lazy_)
+  {
+    return;
+  }
+  ros::NodeHandle& nh = getNodeHandle();
+  const bool overlay_wanted = pub_image_.getNumSubscribers() > 0;
+  const bool any_output = overlay_wanted || pub_projected_.getNumSubscribers() > 0;
+  if (!any_output)
+  {
+    sub_grid_.shutdown();
+    sub_info_.shutdown();
+    std::lock_guard<std::mutex> grid_lock(grid_mutex_);
+    grid_.reset();
+  }
+  else if (!sub_grid_)
+  {
+    sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
+    sub_info_ = nh.subscribe("camera_info", 5, &GridProjectionNodelet::cameraInfoCb, this);
+  }
+  if (!overlay_wanted)
+  {
+    sub_image_.shutdown();
+    std::lock_guard<std::mutex> overlay_lock(overlay_mutex_);
+    images_.clear();
+    projections_.clear();
+  }
+  else if (!sub_image_)
+  {
+    sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+  }
+}
+
+void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
+{
+  const std::string error = checkDynamicGrid(*grid_msg);
+  if (!error.empty())
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: dropping the grid at t=%.3f on %s: %s",
+                          grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(), error.c_str());
+    return;
+  }
+  std::lock_guard<std::mutex> lock(grid_mutex_);
+  if (grid_ && grid_msg->header.stamp < grid_->header.stamp)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: time jumped backwards on %s (%.3f after %.3f): grid replaced",
+                          sub_grid_.getTopic().c_str(), grid_msg->header.stamp.toSec(),
+                          grid_->header.stamp.toSec());
+  }
+  grid_ = grid_msg;
+}
+
+bool GridProjectionNodelet::groundZ(const std::string& grid_frame, const ros::Time& stamp, double& ground_z)
+{
+  if (ground_frame_.empty())
+  {
+    ground_z = ground_height_;
+    return true;
+  }
+  try
+  {
+    const Eigen::Isometry3d grid_from_ground =
+        tf2::transformToEigen(tf_buffer_->lookupTransform(grid_frame, ground_frame_, stamp));
+    ground_z = (grid_from_ground * Eigen::Vector3d(0.0, 0.0, ground_height_)).z();
+    return true;
+  }
+  catch (const tf2::TransformException& e)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: no tf %s <- %s (ground_frame) at t=%.3f, nothing published: %s",
+                          grid_frame.c_str(), ground_frame_.c_str(), stamp.toSec(), e.what());
+    return false;
+  }
+}
+
+void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
+{
+  DynamicGrid::ConstPtr grid;
+  {
+    std::lock_guard<std::mutex> lock(grid_mutex_);
+    grid = grid_;
+  }
+  if (!grid)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
+                          info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
+    return;
+  }
+  std::unique_ptr<PinholeCamera> camera;
+  try
+  {
+    camera = std::make_unique<PinholeCamera>(pinholeFromCameraInfo(*info_msg));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "grid_projection: unusable camera_info on %s (frame '%s'), nothing published: %s",
+                           sub_info_.getTopic().c_str(), info_msg->header.frame_id.c_str(), e.what());
+    return;
+  }
+  const ros::Time& image_stamp = info_msg->header.stamp;
+  const double grid_age = (image_stamp - grid->header.stamp).toSec();
+  if (std::abs(grid_age) > max_grid_age_)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS,
+                          "grid_projection: latest grid on %s (t=%.3f) is %.3f s away from the image (t=%.3f), "
+                          "more than ~max_grid_age %.3f s: nothing published",
+                          sub_grid_.getTopic().c_str(), grid->header.stamp.toSec(), grid_age, image_stamp.toSec(),
+                          max_grid_age_);
+    return;
+  }
+
+  ProjectionGeometry geometry;
+  geometry.time_offset = grid_age;
+  try
+  {
+    // Non-blocking: lookupTransform without a timeout answers from the buffer or throws.
+    geometry.camera_from_grid = tf2::transformToEigen(
+        tf_buffer_->lookupTransform(info_msg->header.frame_id, grid->header.frame_id, image_stamp));
+  }
+  catch (const tf2::TransformException& e)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: no tf %s <- %s at t=%.3f, nothing published: %s",
+                          info_msg->header.frame_id.c_str(), grid->header.frame_id.c_str(), image_stamp.toSec(),
+                          e.what());
+    return;
+  }
+  if (!groundZ(grid->header.frame_id, image_stamp, geometry.ground_z))
+  {
+    return;
+  }
+
+  ProjectedCells cells;
+  try
+  {
+    cells = projectGrid(gridCellsViewOf(*grid), *camera, geometry, config_);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: cannot project the grid of %s into %s: %s",
+                          sub_grid_.getTopic().c_str(), info_msg->header.frame_id.c_str(), e.what());
+    return;
+  }
+  if (cells.cells_invalid > 0)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: %zu cells of the grid on %s skipped (NaN/Inf probability or "
+                          "velocity)",
+                          cells.cells_invalid, sub_grid_.getTopic().c_str());
+  }
+  NODELET_DEBUG_THROTTLE(kThrottleS, "grid_projection: %zu of %zu selected cells projected (%zu behind, %zu outside)",
+                         cells.size(), cells.cells_selected, cells.points_behind, cells.points_outside);
+
+  ProjectedGrid::Ptr projected = projectedGridToMsg(std::move(cells), info_msg->header, grid->header, *camera);
+  if (pub_image_.getNumSubscribers() > 0)
+  {
+    {
+      std::lock_guard<std::mutex> lock(overlay_mutex_);
+      projections_.push_back(projected);
+      while (projections_.size() > static_cast<std::size_t>(image_cache_size_))
+      {
+        projections_.pop_front();
+      }
+    }
+    publishMatchedOverlay();
+  }
+  pub_projected_.publish(projected);
+}
+
+void GridProjectionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
+{
+  {
+    std::lock_guard<std::mutex> lock(overlay_mutex_);
+    images_.push_back(image_msg);
+    while (images_.size() > static_cast<std::size_t>(image_cache_size_))
+    {
+      images_.pop_front();
+    }
+  }
+  publishMatchedOverlay();
+}
+
+void GridProjectionNodelet::publishMatchedOverlay()
+{
+  sensor_msgs::Image::ConstPtr image_msg;
+  ProjectedGrid::ConstPtr projected;
+  {
+    std::lock_guard<std::mutex> lock(overlay_mutex_);
+    for (std::size_t i = 0; i < images_.size() && !projected; ++i)
+    {
+      for (std::size_t j = 0; j < projections_.size(); ++j)
+      {
+        if (projections_[j]->header.stamp == images_[i]->header.stamp)
+        {
+          image_msg = images_[i];
+          projected = projections_[j];
+          images_.erase(images_.begin() + static_cast<std::ptrdiff_t>(i));
+          projections_.erase(projections_.begin() + static_cast<std::ptrdiff_t>(j));
+          break;
+        }
+      }
+    }
+  }
+  if (!projected)
+  {
+    return;
+  }
+  cv_bridge::CvImagePtr canvas;
+  try
+  {
+    canvas = cv_bridge::toCvCopy(image_msg, sensor_msgs::image_encodings::BGR8);
+  }
+  catch (const cv_bridge::Exception& e)
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "grid_projection: cannot draw on image of encoding '%s' from %s: %s",
+                           image_msg->encoding.c_str(), sub_image_.getTopic().c_str(), e.what());
+    return;
+  }
+  if (canvas->image.cols != static_cast<int>(projected->image_width) ||
+      canvas->image.rows != static_cast<int>(projected->image_height))
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: image on %s is %dx%d but camera_info says %ux%u",
+                          sub_image_.getTopic().c_str(), canvas->image.cols, canvas->image.rows,
+                          projected->image_width, projected->image_height);
+  }
+  drawProjectedPoints(canvas->image, viewOf(*projected));
+  pub_image_.publish(canvas->toImageMsg());
+}
+
+}  // namespace grid_vision_fusion
+
+PLUGINLIB_EXPORT_CLASS(grid_vision_fusion::GridProjectionNodelet, nodelet::Nodelet)
