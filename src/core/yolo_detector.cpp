@@ -303,9 +303,11 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
         throw YoloModelError(where + "needs positive filters, size, stride and groups dividing the " +
                              std::to_string(previous.channels) + " input channels");
       }
-      info.parameters += static_cast<std::size_t>(filters) * (batch_normalize ? 4 : 1);
-      info.parameters += static_cast<std::size_t>(filters) * static_cast<std::size_t>(previous.channels / groups) *
-                         static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+      const std::size_t weights = static_cast<std::size_t>(filters) *
+                                  static_cast<std::size_t>(previous.channels / groups) *
+                                  static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+      info.blocks.push_back({filters, weights, batch_normalize});
+      info.parameters += static_cast<std::size_t>(filters) * (batch_normalize ? 4 : 1) + weights;
       out = {filters, (previous.height + 2 * padding - size) / stride + 1,
              (previous.width + 2 * padding - size) / stride + 1};
     }
@@ -315,6 +317,7 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
       const bool batch_normalize = cfgInt(s, "batch_normalize", 0, cfg_path) != 0;
       const std::size_t inputs = static_cast<std::size_t>(previous.channels) *
                                  static_cast<std::size_t>(previous.height) * static_cast<std::size_t>(previous.width);
+      info.blocks.push_back({outputs, static_cast<std::size_t>(outputs) * inputs, batch_normalize});
       info.parameters += static_cast<std::size_t>(outputs) * (inputs + (batch_normalize ? 4 : 1));
       out = {outputs, 1, 1};
     }

@@ -94,6 +94,16 @@ struct YoloDetectorConfig
   void validate() const;
 };
 
+/// The parameters of one weighted Darknet layer, in the order of the weights file: biases
+/// (`outputs`), if batch-normalised scales, rolling means and rolling variances (`outputs`
+/// each), then `weights` kernel values.
+struct DarknetParamBlock
+{
+  int outputs = 0;
+  std::size_t weights = 0;
+  bool batch_normalize = false;
+};
+
 /// What a Darknet cfg describes, as far as loading needs it.
 struct DarknetCfgInfo
 {
@@ -103,6 +113,7 @@ struct DarknetCfgInfo
   int num_classes = -1;     ///< `classes` of the [yolo]/[region] layers (-1: none)
   int yolo_layers = 0;      ///< number of [yolo]/[region] sections
   std::size_t parameters = 0;  ///< float32 values the weights file must hold after its header
+  std::vector<DarknetParamBlock> blocks;  ///< the weighted layers, in file order
 };
 
 /// Parses a Darknet cfg and counts the parameters of its layers (convolutional with optional
