@@ -504,3 +504,65 @@ TEST(DrawTest, BoxesAreDrawnInTheImage)
 
 }  // namespace
 }  // namespace grid_vision_fusion
+
+namespace grid_vision_fusion
+{
+namespace
+{
+TEST(Yolov4StyleTest, MishGroupedRouteAndScaleXYLoadAndRun)
+{
+  // The YOLOv4(-tiny) building blocks: mish activation, CSP split by a grouped route,
+  // concatenating route, scale_x_y in [yolo]. Random weights of the exact size the cfg needs.
+  const std::string dir = test::makeTempDirectory();
+  const std::string cfg = dir + "/v4.cfg";
+  std::ofstream(cfg) << "[net]\nwidth=32\nheight=32\nchannels=3\n"
+                        "[convolutional]\nbatch_normalize=1\nfilters=8\nsize=3\nstride=2\npad=1\nactivation=mish\n"
+                        "[route]\nlayers=-1\ngroups=2\ngroup_id=1\n"
+                        "[convolutional]\nbatch_normalize=1\nfilters=4\nsize=3\nstride=1\npad=1\nactivation=leaky\n"
+                        "[route]\nlayers=-1,-3\n"
+                        "[maxpool]\nsize=2\nstride=2\n"
+                        "[convolutional]\nfilters=12\nsize=1\nstride=1\npad=1\nactivation=linear\n"
+                        "[yolo]\nmask=0\nanchors=10,14\nclasses=7\nnum=1\nscale_x_y=1.05\n";
+  std::ofstream names(dir + "/v4.names");
+  for (int c = 0; c < 7; ++c)
+  {
+    names << "c" << c << "\n";
+  }
+  names.close();
+  const DarknetCfgInfo info = parseDarknetCfg(cfg);
+  ASSERT_EQ(info.blocks.size(), 3U);
+  EXPECT_EQ(info.blocks[1].weights, 4U * 4U * 9U) << "the grouped route passes 4 of 8 channels";
+  EXPECT_EQ(info.blocks[2].weights, 12U * 12U) << "the concatenating route gives 4 + 8 channels";
+  std::ofstream weights(dir + "/v4.weights", std::ios::binary);
+  const std::int32_t version[3] = {0, 2, 0};
+  const std::uint64_t seen = 0;
+  weights.write(reinterpret_cast<const char*>(version), sizeof(version));
+  weights.write(reinterpret_cast<const char*>(&seen), sizeof(seen));
+  for (std::size_t i = 0; i < info.parameters; ++i)
+  {
+    const float value = 0.5F + 0.01F * static_cast<float>(i % 7);  // positive: valid BN variances
+    weights.write(reinterpret_cast<const char*>(&value), sizeof(value));
+  }
+  weights.close();
+  YoloDetectorConfig config;
+  config.model_path = cfg;
+  config.weights_path = dir + "/v4.weights";
+  config.class_names_path = dir + "/v4.names";
+  config.score_threshold = 0.0;
+  YoloDetector detector(config);
+  EXPECT_EQ(detector.inputSize(), cv::Size(32, 32));
+  cv::Mat image(48, 64, CV_8UC3, cv::Scalar(10, 200, 90));
+  const auto detections = detector.detect(image, PixelFormat::kBgr8);
+  for (const Detection& d : detections)
+  {
+    EXPECT_GE(d.box.x_min, 0.F);
+    EXPECT_LE(d.box.x_max, 64.F);
+    EXPECT_GE(d.box.y_min, 0.F);
+    EXPECT_LE(d.box.y_max, 48.F);
+    EXPECT_LT(d.class_id, 7U);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace grid_vision_fusion
