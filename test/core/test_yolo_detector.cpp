@@ -133,6 +133,21 @@ TEST_F(YoloDetectorTest, ChannelOrderOfEveryPixelFormat)
   }
 }
 
+TEST_F(YoloDetectorTest, OpenCvZeroesScoresBelowTheYoloLayerThresh)
+{
+  // Documented behaviour of OpenCV's region layer: class columns below the [yolo] `thresh`
+  // (0.2 when the cfg has none) are zeroed, so even score_threshold 0 cannot see them.
+  YoloDetectorConfig config = tinyConfig();
+  config.score_threshold = 0.0;
+  YoloDetector detector(config);
+  // Red 122: logits 20·122/255 − 10 = −0.43, score σ(−0.43)² = 0.155 < 0.2: gone.
+  EXPECT_TRUE(detector.detect(imageWithPixel({16, 16}, 5, 7, {0, 0, 122}), PixelFormat::kBgr8).empty());
+  // Red 128: logits 0.039, score σ(0.039)² = 0.26 > 0.2: kept.
+  const auto kept = detector.detect(imageWithPixel({16, 16}, 5, 7, {0, 0, 128}), PixelFormat::kBgr8);
+  ASSERT_EQ(kept.size(), 1U);
+  EXPECT_NEAR(kept[0].score, expectedScore(TinyDarknetSpec(), 128.0 / 255.0, 0, 0, 0), kScoreTolerance);
+}
+
 TEST_F(YoloDetectorTest, WrongImageTypeIsRefused)
 {
   YoloDetector detector(tinyConfig());
