@@ -1,0 +1,391 @@
+// grid_vision_fusion/yolo_detector: image → Detection2DArray, by a YOLO network on OpenCV DNN
+// (backend "opencv_dnn") or from per-frame KITTI label files (backend "replay").
+#include <boost/make_shared.hpp>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/callback_queue_interface.h>
+#include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+
+#include "grid_vision_fusion/Detection2DArray.h"
+#include "grid_vision_fusion/YoloDetectorReconfigureConfig.h"
+#include "grid_vision_fusion/core/detection_replay.h"
+#include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/ros/detector_conversions.h"
+#include "grid_vision_fusion/ros/params.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kThrottleS = 5.0;
+
+/// A callback for a ros::CallbackQueue that runs a function.
+class FunctionCallback : public ros::CallbackInterface
+{
+public:
+  explicit FunctionCallback(std::function<void()> function) : function_(std::move(function)) {}
+  CallResult call() override
+  {
+    function_();
+    return Success;
+  }
+
+private:
+  std::function<void()> function_;
+};
+
+}  // namespace
+
+class YoloDetectorNodelet : public nodelet::Nodelet
+{
+public:
+  ~YoloDetectorNodelet() override;
+
+private:
+  using ReconfigureServer = dynamic_reconfigure::Server<YoloDetectorReconfigureConfig>;
+
+  /// An image waiting for inference, with the replay frame index given at its arrival.
+  struct PendingFrame
+  {
+    sensor_msgs::Image::ConstPtr image;
+    std::int64_t frame_index = -1;
+  };
+
+  void onInit() override;
+  void connectCb();
+  void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
+  void processPending();
+  void process(const PendingFrame& frame);
+  bool detect(const PendingFrame& frame, std::vector<Detection>& detections);
+  void publishImage(const sensor_msgs::Image::ConstPtr& image_msg, const std::vector<Detection>& detections);
+  void reconfigureCb(YoloDetectorReconfigureConfig& reconfigure, uint32_t level);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  boost::mutex connect_mutex_;
+  bool lazy_ = true;
+  bool replay_backend_ = false;
+  std::unique_ptr<YoloDetector> detector_;  // used by one process() at a time
+  std::unique_ptr<DetectionReplay> replay_;
+
+  std::mutex config_mutex_;  // guards the thresholds
+  double score_threshold_ = 0.5;
+  double nms_threshold_ = 0.45;
+
+  // The frame slot between the image callback and the inference on the multi-threaded queue.
+  std::mutex slot_mutex_;
+  PendingFrame pending_;
+  bool worker_scheduled_ = false;
+
+  // Counters and timing for diagnostics (slot_mutex_ guards them too).
+  std::uint64_t frames_received_ = 0;
+  std::uint64_t frames_processed_ = 0;
+  std::uint64_t frames_dropped_ = 0;
+  std::uint64_t frames_failed_ = 0;
+  std::uint64_t dropped_reported_ = 0;
+  std::uint64_t failed_reported_ = 0;
+  double last_inference_ms_ = 0.0;
+  double total_inference_ms_ = 0.0;
+
+  std::unique_ptr<image_transport::ImageTransport> it_;
+  image_transport::Subscriber sub_image_;
+  ros::Publisher pub_detections_;
+  image_transport::Publisher pub_image_;
+  std::unique_ptr<ReconfigureServer> reconfigure_server_;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  ros::WallTimer diagnostics_timer_;
+};
+
+YoloDetectorNodelet::~YoloDetectorNodelet()
+{
+  sub_image_.shutdown();
+  // Waits for a running inference of this nodelet and drops the queued ones.
+  getMTCallbackQueue().removeByID(reinterpret_cast<std::uint64_t>(this));
+}
+
+void YoloDetectorNodelet::onInit()
+{
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+
+  std::string backend = "opencv_dnn";
+  try
+  {
+    readParam(pnh, "lazy", lazy_);
+    readParam(pnh, "backend", backend);
+    if (backend == "opencv_dnn")
+    {
+      const YoloDetectorConfig config = yoloDetectorConfigFromParams(pnh);
+      score_threshold_ = config.score_threshold;
+      nms_threshold_ = config.nms_threshold;
+      detector_ = std::make_unique<YoloDetector>(config);
+    }
+    else if (backend == "replay")
+    {
+      replay_backend_ = true;
+      const DetectionReplayConfig config = detectionReplayConfigFromParams(pnh);
+      score_threshold_ = config.score_threshold;
+      replay_ = std::make_unique<DetectionReplay>(config);
+    }
+    else
+    {
+      throw std::invalid_argument("parameter " + pnh.resolveName("backend") +
+                                  " must be \"opencv_dnn\" or \"replay\", got \"" + backend + "\"");
+    }
+  }
+  catch (const std::exception& e)
+  {
+    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s", e.what());
+    return;
+  }
+  if (detector_)
+  {
+    for (const std::string& warning : detector_->warnings())
+    {
+      NODELET_WARN("yolo_detector: %s", warning.c_str());
+    }
+  }
+
+  updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+  updater_->setHardwareID(replay_backend_ ? "replay " + replay_->config().directory : detector_->config().model_path);
+  updater_->add("yolo_detector", this, &YoloDetectorNodelet::diagnose);
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.1, updater_->getPeriod())),
+                                          [this](const ros::WallTimerEvent&) { updater_->update(); });
+
+  reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
+  reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this, boost::placeholders::_1,
+                                               boost::placeholders::_2));
+
+  it_ = std::make_unique<image_transport::ImageTransport>(nh);
+  ros::SubscriberStatusCallback connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  pub_detections_ = nh.advertise<Detection2DArray>("detections", 1, connect_cb, connect_cb);
+  pub_image_ = it_->advertise("detections/image", 1, image_connect_cb, image_connect_cb);
+  if (!lazy_)
+  {
+    sub_image_ = it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(), pnh));
+  }
+  if (replay_backend_)
+  {
+    NODELET_INFO("yolo_detector: replaying %s/%s, frame index from the %s, %s", replay_->config().directory.c_str(),
+                 replay_->config().file_pattern.c_str(), toString(replay_->config().index_source).c_str(),
+                 lazy_ ? "lazy" : "always subscribed");
+  }
+  else
+  {
+    NODELET_INFO("yolo_detector: %s (%zu classes), input %dx%d %s, %s, score >= %.2f, NMS IoU %.2f, %s",
+                 detector_->config().model_path.c_str(), detector_->classNames().size(), detector_->inputSize().width,
+                 detector_->inputSize().height, toString(detector_->config().resize_mode).c_str(),
+                 detector_->backendDescription().c_str(), score_threshold_, nms_threshold_,
+                 lazy_ ? "lazy" : "always subscribed");
+  }
+}
+
+void YoloDetectorNodelet::connectCb()
+{
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  if (!lazy_)
+  {
+    return;
+  }
+  const bool any_output = pub_detections_.getNumSubscribers() > 0 || pub_image_.getNumSubscribers() > 0;
+  if (!any_output)
+  {
+    sub_image_.shutdown();
+  }
+  else if (!sub_image_)
+  {
+    sub_image_ = it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
+                                image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+  }
+}
+
+void YoloDetectorNodelet::reconfigureCb(YoloDetectorReconfigureConfig& reconfigure, uint32_t /*level*/)
+{
+  std::lock_guard<std::mutex> lock(config_mutex_);
+  score_threshold_ = reconfigure.score_threshold;
+  nms_threshold_ = reconfigure.nms_threshold;
+}
+
+void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
+{
+  std::int64_t frame_index = -1;
+  if (replay_backend_)
+  {
+    try
+    {
+      frame_index = replay_->nextFrameIndex(image_msg->header.seq);
+    }
+    catch (const std::out_of_range& e)
+    {
+      NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f skipped: %s",
+                             sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), e.what());
+      return;
+    }
+  }
+  bool schedule = false;
+  {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    ++frames_received_;
+    if (pending_.image)
+    {
+      ++frames_dropped_;  // inference is slower than the camera: the older frame is dropped
+    }
+    pending_ = {image_msg, frame_index};
+    schedule = !worker_scheduled_;
+    worker_scheduled_ = true;
+  }
+  if (schedule)
+  {
+    // Inference runs on the manager's multi-threaded queue; this callback returns at once so
+    // that the newest frame always replaces a waiting one.
+    getMTCallbackQueue().addCallback(boost::make_shared<FunctionCallback>([this] { processPending(); }),
+                                     reinterpret_cast<std::uint64_t>(this));
+  }
+}
+
+void YoloDetectorNodelet::processPending()
+{
+  while (true)
+  {
+    PendingFrame frame;
+    {
+      std::lock_guard<std::mutex> lock(slot_mutex_);
+      if (!pending_.image)
+      {
+        worker_scheduled_ = false;
+        return;
+      }
+      std::swap(frame, pending_);
+    }
+    process(frame);
+  }
+}
+
+bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detection>& detections)
+{
+  const sensor_msgs::Image& image = *frame.image;
+  double score_threshold = 0.0;
+  double nms_threshold = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(config_mutex_);
+    score_threshold = score_threshold_;
+    nms_threshold = nms_threshold_;
+  }
+  try
+  {
+    if (replay_backend_)
+    {
+      replay_->setScoreThreshold(score_threshold);
+      detections = replay_->detectionsOf(frame.frame_index, image.width, image.height);
+      return true;
+    }
+    const PixelFormat format = pixelFormatFromEncoding(image.encoding);
+    const cv_bridge::CvImageConstPtr view = cv_bridge::toCvShare(frame.image);
+    detector_->setThresholds(score_threshold, nms_threshold);
+    detections = detector_->detect(view->image, format);
+    return true;
+  }
+  catch (const std::exception& e)
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f (%ux%u, %s) not processed: %s",
+                           sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width, image.height,
+                           image.encoding.c_str(), e.what());
+  }
+  return false;
+}
+
+void YoloDetectorNodelet::process(const PendingFrame& frame)
+{
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Detection> detections;
+  const bool ok = detect(frame, detections);
+  const double elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(slot_mutex_);
+    if (ok)
+    {
+      ++frames_processed_;
+      last_inference_ms_ = elapsed_ms;
+      total_inference_ms_ += elapsed_ms;
+    }
+    else
+    {
+      ++frames_failed_;
+    }
+  }
+  if (!ok)
+  {
+    return;
+  }
+  if (pub_image_.getNumSubscribers() > 0)
+  {
+    publishImage(frame.image, detections);
+  }
+  pub_detections_.publish(detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
+}
+
+void YoloDetectorNodelet::publishImage(const sensor_msgs::Image::ConstPtr& image_msg,
+                                       const std::vector<Detection>& detections)
+{
+  cv_bridge::CvImagePtr canvas;
+  try
+  {
+    canvas = cv_bridge::toCvCopy(image_msg, sensor_msgs::image_encodings::BGR8);
+  }
+  catch (const cv_bridge::Exception& e)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "yolo_detector: cannot draw on image of encoding '%s' from %s: %s",
+                          image_msg->encoding.c_str(), sub_image_.getTopic().c_str(), e.what());
+    return;
+  }
+  drawDetections(canvas->image, detections);
+  pub_image_.publish(canvas->toImageMsg());
+}
+
+void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
+{
+  std::lock_guard<std::mutex> lock(slot_mutex_);
+  if (frames_failed_ > failed_reported_)
+  {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "%lu images could not be processed since the last report",
+                    static_cast<unsigned long>(frames_failed_ - failed_reported_));
+  }
+  else if (frames_dropped_ > dropped_reported_)
+  {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "%lu frames dropped since the last report: inference slower than the camera",
+                    static_cast<unsigned long>(frames_dropped_ - dropped_reported_));
+  }
+  else
+  {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "detecting");
+  }
+  dropped_reported_ = frames_dropped_;
+  failed_reported_ = frames_failed_;
+  status.add("backend", replay_backend_ ? std::string("replay") : "opencv_dnn " + detector_->backendDescription());
+  status.add("frames received", frames_received_);
+  status.add("frames processed", frames_processed_);
+  status.add("frames dropped", frames_dropped_);
+  status.add("frames failed", frames_failed_);
+  status.addf("last inference time [ms]", "%.2f", last_inference_ms_);
+  status.addf("mean inference time [ms]", "%.2f",
+              frames_processed_ > 0 ? total_inference_ms_ / static_cast<double>(frames_processed_) : 0.0);
+}
+
+}  // namespace grid_vision_fusion
+
+PLUGINLIB_EXPORT_CLASS(grid_vision_fusion::YoloDetectorNodelet, nodelet::Nodelet)
