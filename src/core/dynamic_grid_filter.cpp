@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -187,7 +188,7 @@ void DynamicGridFilter::reset()
   initialised_ = false;
 }
 
-float DynamicGridFilter::normal()
+inline float DynamicGridFilter::normal()
 {
   if (normal_has_spare_)
   {
@@ -199,7 +200,7 @@ float DynamicGridFilter::normal()
   return normalTable()[normal_bits_ & (kNormalTableSize - 1)];
 }
 
-float DynamicGridFilter::uniform()
+inline float DynamicGridFilter::uniform()
 {
   return static_cast<float>(static_cast<std::uint32_t>(rng_()) >> 8) * (1.0F / 16777216.0F);
 }
@@ -216,7 +217,7 @@ void DynamicGridFilter::placeGrid(const Eigen::Isometry3d& world_from_sensor, st
   row = static_cast<std::int64_t>(std::llround(cy / config_.resolution - 0.5 * config_.height));
 }
 
-void DynamicGridFilter::predictParticles(float dt)
+void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, float to_unknown)
 {
   // Eq. 3: constant velocity with a random acceleration a ~ N(0, sigma_a^2) per axis:
   // x += v dt + a dt^2 / 2, v += a dt.
@@ -250,13 +251,23 @@ void DynamicGridFilter::predictParticles(float dt)
     }
     const int c = std::min(static_cast<int>(p.x[i] * inv_res), geometry_.width - 1);
     const int r = std::min(static_cast<int>(p.y[i] * inv_res), geometry_.height - 1);
-    p.cell[i] = static_cast<std::int32_t>(geometry_.index(r, c));
+    const std::size_t cell = geometry_.index(r, c);
+    p.cell[i] = static_cast<std::int32_t>(cell);
+    // Eq. 4: the particle keeps the fraction `keep` of its mass as dynamic; the rest becomes
+    // static or unknown mass of the cell it arrives in.
+    const float w = p.weight[i];
+    pred_dynamic_[cell] += w * keep;
+    from_dynamic_static_[cell] += w * to_static;
+    from_dynamic_unknown_[cell] += w * to_unknown;
+    p.weight[i] = w * keep;
   }
 }
 
 DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
                                            double stamp)
 {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point t_start = Clock::now();
   DynamicGridCycle cycle;
   if (initialised_)
   {
@@ -307,6 +318,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
   ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
 
   // 2. Inverse sensor model: p_o per cell.
+  const Clock::time_point t_model = Clock::now();
   if (cloud.size() > 0)
   {
     cycle.sensor = sensor_model_.compute(cloud, world_from_sensor, geometry_, occupancy_);
@@ -315,6 +327,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
   {
     occupancy_.assign(geometry_.cellCount(), 0.5F);
   }
+  const Clock::time_point t_model_end = Clock::now();
 
   // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
   // scan has no motion; its transitions use one transition_period so that it counts.
@@ -335,23 +348,10 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
   std::fill(from_dynamic_unknown_.begin(), from_dynamic_unknown_.end(), 0.0F);
   if (!first)
   {
-    predictParticles(static_cast<float>(dt));
+    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
   }
   ParticleArrays& p = particles_;
   const std::size_t n = p.size();
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    const std::int32_t c = p.cell[i];
-    if (c < 0)
-    {
-      continue;
-    }
-    const float w = p.weight[i];
-    pred_dynamic_[static_cast<std::size_t>(c)] += w * rd.stay;
-    from_dynamic_static_[static_cast<std::size_t>(c)] += w * rd.to[0];
-    from_dynamic_unknown_[static_cast<std::size_t>(c)] += w * rd.to[1];
-    p.weight[i] = w * rd.stay;
-  }
 
   // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
   for (std::size_t c = 0; c < cells; ++c)
@@ -433,13 +433,14 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
   }
 
   // 8-9. Birth in proportion to the newborn mass, resampling.
-  birthAndResample(cycle.particles_born);
-  cycle.particles_in_use = static_cast<std::size_t>(
-      std::count_if(particles_.weight.begin(), particles_.weight.end(), [](float w) { return w > 0.0F; }));
+  cycle.particles_in_use = birthAndResample(cycle.particles_born);
+  const Clock::time_point t_end = Clock::now();
+  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
+  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
   return cycle;
 }
 
-void DynamicGridFilter::birthAndResample(std::size_t& born)
+std::size_t DynamicGridFilter::birthAndResample(std::size_t& born)
 {
   // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
   // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
@@ -508,7 +509,7 @@ void DynamicGridFilter::birthAndResample(std::size_t& born)
   {
     std::fill(p.weight.begin(), p.weight.end(), 0.0F);
     std::fill(p.cell.begin(), p.cell.end(), -1);
-    return;
+    return 0;
   }
   const double step = total / static_cast<double>(n);
   const auto w_out = static_cast<float>(step);
@@ -541,12 +542,14 @@ void DynamicGridFilter::birthAndResample(std::size_t& born)
   {
     emit(birth_x_[k], birth_y_[k], birth_vx_[k], birth_vy_[k], birth_w_[k], birth_cell_[k]);
   }
+  const std::size_t in_use = out;
   for (; out < n; ++out)  // rounding at the very end: no particle left to copy
   {
     r.weight[out] = 0.0F;
     r.cell[out] = -1;
   }
   std::swap(particles_, resampled_);
+  return in_use;
 }
 
 CellClass DynamicGridFilter::classify(std::size_t index) const

@@ -23,6 +23,32 @@ void require(bool condition, const char* field, const std::string& what)
   }
 }
 
+inline float atan2Approx(float y, float x)
+{
+  // atan on [0, 1] by a degree-11 odd minimax polynomial (|error| < 1e-5 rad), then octant
+  // reconstruction.
+  const float ax = std::fabs(x);
+  const float ay = std::fabs(y);
+  const float mx = std::max(ax, ay);
+  if (mx == 0.0F)
+  {
+    return 0.0F;
+  }
+  const float a = std::min(ax, ay) / mx;
+  const float s = a * a;
+  float r = a * (0.99997726F +
+                 s * (-0.33262347F + s * (0.19354346F + s * (-0.11643287F + s * (0.05265332F + s * -0.01172120F)))));
+  if (ay > ax)
+  {
+    r = 0.5F * kPi - r;
+  }
+  if (x < 0.0F)
+  {
+    r = kPi - r;
+  }
+  return y < 0.0F ? -r : r;
+}
+
 float readFloat(const std::uint8_t* p)
 {
   float v;
@@ -65,28 +91,7 @@ void InverseSensorModelConfig::validate() const
 
 float fastAtan2(float y, float x)
 {
-  // atan on [0, 1] by a degree-11 odd minimax polynomial (|error| < 1e-5 rad), then octant
-  // reconstruction.
-  const float ax = std::fabs(x);
-  const float ay = std::fabs(y);
-  const float mx = std::max(ax, ay);
-  if (mx == 0.0F)
-  {
-    return 0.0F;
-  }
-  const float a = std::min(ax, ay) / mx;
-  const float s = a * a;
-  float r = a * (0.99997726F +
-                 s * (-0.33262347F + s * (0.19354346F + s * (-0.11643287F + s * (0.05265332F + s * -0.01172120F)))));
-  if (ay > ax)
-  {
-    r = 0.5F * kPi - r;
-  }
-  if (x < 0.0F)
-  {
-    r = kPi - r;
-  }
-  return y < 0.0F ? -r : r;
+  return atan2Approx(y, x);
 }
 
 InverseSensorModel::InverseSensorModel(const InverseSensorModelConfig& config) : config_(config)
@@ -101,9 +106,9 @@ InverseSensorModel::InverseSensorModel(const InverseSensorModelConfig& config) :
   farthest_return_.resize(static_cast<std::size_t>(sectors_));
 }
 
-int InverseSensorModel::sectorOf(float dx, float dy) const
+inline int InverseSensorModel::sectorOf(float dx, float dy) const
 {
-  int s = static_cast<int>((fastAtan2(dy, dx) + kPi) * sectors_per_rad_);
+  int s = static_cast<int>((atan2Approx(dy, dx) + kPi) * sectors_per_rad_);
   return s >= sectors_ ? s - sectors_ : (s < 0 ? 0 : s);
 }
 

@@ -12,10 +12,9 @@ namespace
 constexpr double kDeg = M_PI / 180.0;
 
 // Ray-box intersection (slab method) in the box frame; returns the entry distance or +inf.
-double intersectBox(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Box& box, double ground_z)
+double intersectBox(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Box& box, double ground_z,
+                    double c, double s)
 {
-  const double c = std::cos(box.yaw);
-  const double s = std::sin(box.yaw);
   const Eigen::Vector3d rel(origin.x() - box.x, origin.y() - box.y, origin.z() - (ground_z + box.bottom));
   const Eigen::Vector3d o(c * rel.x() + s * rel.y(), -s * rel.x() + c * rel.y(), rel.z());
   const Eigen::Vector3d d(c * dir.x() + s * dir.y(), -s * dir.x() + c * dir.y(), dir.z());
@@ -86,6 +85,15 @@ std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_senso
   const Eigen::Vector3d origin = world_from_sensor.translation();
   // Ground plane z = h + a x  <=>  n . p = h with n = (-a, 0, 1).
   const Eigen::Vector3d n(-config_.ground_slope_x, 0.0, 1.0);
+  std::vector<double> cos_yaw;
+  std::vector<double> sin_yaw;
+  std::vector<double> box_ground;
+  for (const Box& box : boxes)
+  {
+    cos_yaw.push_back(std::cos(box.yaw));
+    sin_yaw.push_back(std::sin(box.yaw));
+    box_ground.push_back(groundZ(box.x, box.y));
+  }
   for (const Eigen::Vector3d& ds : directions_)
   {
     const Eigen::Vector3d dw = rot * ds;
@@ -99,9 +107,9 @@ std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_senso
         t = tg;
       }
     }
-    for (const Box& box : boxes)
+    for (std::size_t b = 0; b < boxes.size(); ++b)
     {
-      t = std::min(t, intersectBox(origin, dw, box, groundZ(box.x, box.y)));
+      t = std::min(t, intersectBox(origin, dw, boxes[b], box_ground[b], cos_yaw[b], sin_yaw[b]));
     }
     if (!(t <= config_.max_range))
     {

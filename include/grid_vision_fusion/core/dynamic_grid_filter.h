@@ -73,6 +73,8 @@ struct DynamicGridCycle
   std::size_t particles_in_use = 0;  ///< particles with a non-zero weight after resampling
   std::size_t particles_born = 0;
   InverseSensorModelStats sensor;   ///< counters of the inverse sensor model
+  double sensor_model_seconds = 0.0;  ///< wall time of the inverse sensor model [s]
+  double filter_seconds = 0.0;        ///< wall time of everything else in the cycle [s]
 };
 
 /// Motion class of a cell for reporting (grid/cells, occupancy).
@@ -132,8 +134,8 @@ public:
 
 private:
   void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
-  void predictParticles(float dt);
-  void birthAndResample(std::size_t& born);
+  void predictParticles(float dt, float keep, float to_static, float to_unknown);
+  std::size_t birthAndResample(std::size_t& born);
   float normal();
   float uniform();
 
