@@ -552,6 +552,17 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born)
   return in_use;
 }
 
+void DynamicGridFilter::setClassification(const DynamicGridConfig& thresholds)
+{
+  DynamicGridConfig updated = config_;
+  updated.dynamic_threshold = thresholds.dynamic_threshold;
+  updated.min_dynamic_speed = thresholds.min_dynamic_speed;
+  updated.mahalanobis_threshold = thresholds.mahalanobis_threshold;
+  updated.occupied_threshold = thresholds.occupied_threshold;
+  updated.validate();
+  config_ = updated;
+}
+
 CellClass DynamicGridFilter::classify(std::size_t index) const
 {
   const float ps = cells_.p_static[index];

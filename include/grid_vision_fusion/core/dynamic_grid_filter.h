@@ -129,6 +129,11 @@ public:
   bool initialised() const { return initialised_; }
   double lastStamp() const { return last_stamp_; }
 
+  /// Replaces the classification thresholds (dynamic_threshold, min_dynamic_speed,
+  /// mahalanobis_threshold, occupied_threshold) by those of `thresholds`; they only affect
+  /// reporting, so this is safe between cycles. @throws std::invalid_argument as validate().
+  void setClassification(const DynamicGridConfig& thresholds);
+
   /// Reporting class of cell `index` (see DynamicGridConfig, classification).
   CellClass classify(std::size_t index) const;
 
