@@ -35,7 +35,8 @@ struct Scan
 
 const std::vector<Scan>& scans()
 {
-  static const std::vector<Scan> sequence = [] {
+  static const std::vector<Scan> sequence = []
+  {
     BoxWorldLidarConfig config;
     config.horizontal_resolution_deg = 0.18;  // 2000 columns x 64 beams, ~120 k points
     config.range_noise_sigma = 0.02;
@@ -113,7 +114,8 @@ void runCycles(benchmark::State& state, const DynamicGridConfig& config)
   int k = 0;
   double stamp = 0.0;
   double cpu_ms = 0.0;
-  auto next = [&]() {
+  auto next = [&]()
+  {
     const Scan& scan = sequence[static_cast<std::size_t>(k)];
     const double cpu_start = threadCpuMs();
     const DynamicGridCycle cycle =
@@ -206,7 +208,13 @@ void BM_CycleCells(benchmark::State& state)
   config.height = config.width;
   runCycles(state, config);
 }
-BENCHMARK(BM_CycleCells)->Unit(benchmark::kMillisecond)->Iterations(100)->Arg(150)->Arg(300)->Arg(450)->Arg(600);
+BENCHMARK(BM_CycleCells)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(100)
+    ->Arg(150)
+    ->Arg(300)
+    ->Arg(450)
+    ->Arg(600);
 
 }  // namespace
 }  // namespace grid_vision_fusion

@@ -19,7 +19,8 @@ constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
 // index gives a normal sample (tails cut at +-4.3 sigma), a deterministic and fast sampler.
 const std::vector<float>& normalTable()
 {
-  static const std::vector<float> table = [] {
+  static const std::vector<float> table = []
+  {
     std::vector<float> t(kNormalTableSize);
     for (std::size_t i = 0; i < kNormalTableSize; ++i)
     {
@@ -71,12 +72,12 @@ Row scaledRow(std::array<double, 3> eps, double dt, double period)
 
 double inverseNormalCdf(double p)
 {
-  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
-                             1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
+  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                             1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
   static const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
                              6.680131188771972e+01, -1.328068155288572e+01};
   static const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
-                             -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
+                             -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
   static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
                              3.754408661907416e+00};
   constexpr double kLow = 0.02425;
@@ -108,7 +109,8 @@ void DynamicGridConfig::validate() const
           "must be in [0.01, 5] m");
   require(std::isfinite(lookahead) && std::fabs(lookahead) <= 1e4, "lookahead", "must be finite [m]");
   require(std::isfinite(max_time_gap) && max_time_gap > 0.0, "max_time_gap", "must be > 0 [s]");
-  require(std::isfinite(transition_period) && transition_period > 0.0, "transition_period", "must be > 0 [s]");
+  require(std::isfinite(transition_period) && transition_period > 0.0, "transition_period",
+          "must be > 0 [s]");
   requireProbability(eps_static_to_dynamic, "eps_static_to_dynamic");
   requireProbability(eps_static_to_unknown, "eps_static_to_unknown");
   requireProbability(eps_dynamic_to_static, "eps_dynamic_to_static");
@@ -134,7 +136,8 @@ void DynamicGridConfig::validate() const
           "must be >= 0 [m/s^2]");
   require(std::isfinite(max_speed) && max_speed > 0.0, "max_speed", "must be > 0 [m/s]");
   require(dynamic_threshold > 0.0 && dynamic_threshold <= 1.0, "dynamic_threshold", "must be in (0, 1]");
-  require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed", "must be >= 0 [m/s]");
+  require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed",
+          "must be >= 0 [m/s]");
   require(std::isfinite(mahalanobis_threshold) && mahalanobis_threshold >= 0.0, "mahalanobis_threshold",
           "must be >= 0");
   require(occupied_threshold > 0.0 && occupied_threshold <= 1.0, "occupied_threshold", "must be in (0, 1]");
@@ -152,14 +155,14 @@ void ParticleArrays::resize(std::size_t n)
 }
 
 DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
-  : config_((config.validate(), config)), sensor_model_(config.sensor_model), rng_(config.seed)
+    : config_((config.validate(), config)), sensor_model_(config.sensor_model), rng_(config.seed)
 {
   geometry_.width = config_.width;
   geometry_.height = config_.height;
   geometry_.resolution = config_.resolution;
   const std::size_t cells = geometry_.cellCount();
-  for (auto* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_, &newborn_, &persistent_factor_,
-                  &stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
+  for (auto* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_, &newborn_,
+                  &persistent_factor_, &stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
   {
     v->resize(cells);
   }
@@ -263,8 +266,8 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
   }
 }
 
-DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
-                                           double stamp)
+DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
+                                           const Eigen::Isometry3d& world_from_sensor, double stamp)
 {
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t_start = Clock::now();
@@ -276,7 +279,8 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
     {
       cycle.reset = true;
       cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
-                                     : "gap of " + std::to_string(gap) + " s since the last scan exceeds max_time_gap (" +
+                                     : "gap of " + std::to_string(gap) +
+                                           " s since the last scan exceeds max_time_gap (" +
                                            std::to_string(config_.max_time_gap) + " s)";
       reset();
     }
@@ -334,13 +338,14 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud, const Ei
   const double dt_transition = first ? config_.transition_period : dt;
   const Row rs = scaledRow({config_.eps_static_to_dynamic, config_.eps_static_to_unknown, 0.0}, dt_transition,
                            config_.transition_period);
-  const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0}, dt_transition,
-                           config_.transition_period);
-  const Row re = scaledRow({config_.eps_free_to_static, config_.eps_free_to_dynamic, config_.eps_free_to_unknown},
+  const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
                            dt_transition, config_.transition_period);
-  const Row ru = scaledRow(
-      {config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free}, dt_transition,
-      config_.transition_period);
+  const Row re =
+      scaledRow({config_.eps_free_to_static, config_.eps_free_to_dynamic, config_.eps_free_to_unknown},
+                dt_transition, config_.transition_period);
+  const Row ru =
+      scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
+                dt_transition, config_.transition_period);
 
   const std::size_t cells = geometry_.cellCount();
   std::fill(pred_dynamic_.begin(), pred_dynamic_.end(), 0.0F);
@@ -517,7 +522,8 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born)
   double cumulative = 0.0;
   std::size_t out = 0;
   ParticleArrays& r = resampled_;
-  auto emit = [&](float x, float y, float vx, float vy, float w, std::int32_t cell) {
+  auto emit = [&](float x, float y, float vx, float vy, float w, std::int32_t cell)
+  {
     cumulative += w;
     while (next < cumulative && out < n)
     {
@@ -574,8 +580,10 @@ CellClass DynamicGridFilter::classify(std::size_t index) const
     const float vx = cells_.vx[index];
     const float vy = cells_.vy[index];
     const float speed2 = vx * vx + vy * vy;
-    const float m2 = vx * vx / std::max(cells_.v_var_x[index], 1e-6F) + vy * vy / std::max(cells_.v_var_y[index], 1e-6F);
-    if (speed2 >= config_.min_dynamic_speed * config_.min_dynamic_speed && m2 >= config_.mahalanobis_threshold)
+    const float m2 =
+        vx * vx / std::max(cells_.v_var_x[index], 1e-6F) + vy * vy / std::max(cells_.v_var_y[index], 1e-6F);
+    if (speed2 >= config_.min_dynamic_speed * config_.min_dynamic_speed &&
+        m2 >= config_.mahalanobis_threshold)
     {
       return CellClass::kDynamic;
     }

@@ -34,7 +34,8 @@ void CellStates::reset(std::size_t cells, float prior_velocity_variance)
 
 namespace
 {
-void shiftArray(std::vector<float>& a, int width, int height, std::int64_t d_col, std::int64_t d_row, float fill)
+void shiftArray(std::vector<float>& a, int width, int height, std::int64_t d_col, std::int64_t d_row,
+                float fill)
 {
   if (std::llabs(d_col) >= width || std::llabs(d_row) >= height)
   {
@@ -48,7 +49,7 @@ void shiftArray(std::vector<float>& a, int width, int height, std::int64_t d_col
   const int r_begin = dr >= 0 ? 0 : height - 1;
   const int r_end = dr >= 0 ? height : -1;
   const int r_step = dr >= 0 ? 1 : -1;
-  const int c_lo = std::max(0, -dc);           // first new column with an old source
+  const int c_lo = std::max(0, -dc);             // first new column with an old source
   const int c_hi = std::min(width, width - dc);  // one past the last
   for (int r = r_begin; r != r_end; r += r_step)
   {

@@ -36,8 +36,9 @@ inline float atan2Approx(float y, float x)
   }
   const float a = std::min(ax, ay) / mx;
   const float s = a * a;
-  float r = a * (0.99997726F +
-                 s * (-0.33262347F + s * (0.19354346F + s * (-0.11643287F + s * (0.05265332F + s * -0.01172120F)))));
+  float r =
+      a * (0.99997726F + s * (-0.33262347F +
+                              s * (0.19354346F + s * (-0.11643287F + s * (0.05265332F + s * -0.01172120F)))));
   if (ay > ax)
   {
     r = 0.5F * kPi - r;
@@ -82,8 +83,8 @@ void InverseSensorModelConfig::validate() const
   require(std::isfinite(ground_tolerance) && ground_tolerance >= 0.0, "ground_tolerance", "must be >= 0 [m]");
   require(std::isfinite(min_obstacle_height) && min_obstacle_height > 0.0, "min_obstacle_height",
           "must be > 0 [m]");
-  require(std::isfinite(max_obstacle_height) && max_obstacle_height > min_obstacle_height, "max_obstacle_height",
-          "must be > min_obstacle_height [m]");
+  require(std::isfinite(max_obstacle_height) && max_obstacle_height > min_obstacle_height,
+          "max_obstacle_height", "must be > min_obstacle_height [m]");
   require(p_occupied > 0.5 && p_occupied < 1.0, "p_occupied", "must be in (0.5, 1)");
   require(p_free > 0.0 && p_free < 0.5, "p_free", "must be in (0, 0.5)");
   require(std::isfinite(range_sigma) && range_sigma > 0.0, "range_sigma", "must be > 0 [m]");
@@ -116,7 +117,8 @@ float InverseSensorModel::groundHeight(double azimuth, double range) const
 {
   const int s = sectorOf(static_cast<float>(std::cos(azimuth)), static_cast<float>(std::sin(azimuth)));
   const int b = std::clamp(static_cast<int>(range / config_.range_resolution), 0, range_bins_ - 1);
-  return ground_z_[static_cast<std::size_t>(s) * static_cast<std::size_t>(range_bins_) + static_cast<std::size_t>(b)];
+  return ground_z_[static_cast<std::size_t>(s) * static_cast<std::size_t>(range_bins_) +
+                   static_cast<std::size_t>(b)];
 }
 
 InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
@@ -164,7 +166,8 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
         continue;
       }
       const int b = std::min(static_cast<int>(std::sqrt(r2) * inv_range_res), range_bins_ - 1);
-      const std::size_t bin = static_cast<std::size_t>(sectorOf(d.x(), d.y())) * bins + static_cast<std::size_t>(b);
+      const std::size_t bin =
+          static_cast<std::size_t>(sectorOf(d.x(), d.y())) * bins + static_cast<std::size_t>(b);
       point_bin_[i] = static_cast<std::int32_t>(bin);
       point_x_[i] = d.x();
       point_y_[i] = d.y();

@@ -1,19 +1,19 @@
 // grid_vision_fusion/dynamic_grid: lidar PointCloud2 + tf -> CMCDOT-style dynamic occupancy grid.
-#include <boost/thread/lock_guard.hpp>
-#include <boost/thread/mutex.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
 #include <message_filters/subscriber.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <chrono>
 #include <memory>
@@ -112,8 +112,8 @@ void DynamicGridNodelet::onInit()
   }
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
-  reconfigure_server_->setCallback(boost::bind(&DynamicGridNodelet::reconfigureCb, this, boost::placeholders::_1,
-                                               boost::placeholders::_2));
+  reconfigure_server_->setCallback(boost::bind(&DynamicGridNodelet::reconfigureCb, this,
+                                               boost::placeholders::_1, boost::placeholders::_2));
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
@@ -131,10 +131,12 @@ void DynamicGridNodelet::onInit()
       diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 10), "input rate");
   updater_->add(*input_rate_);
   updater_->add("dynamic grid", this, &DynamicGridNodelet::diagnose);
-  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
-    std::lock_guard<std::mutex> lock(filter_mutex_);
-    updater_->update();
-  });
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                                          [this](const ros::WallTimerEvent&)
+                                          {
+                                            std::lock_guard<std::mutex> lock(filter_mutex_);
+                                            updater_->update();
+                                          });
 
   ros::SubscriberStatusCallback connect_cb = boost::bind(&DynamicGridNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
@@ -194,9 +196,10 @@ void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& c
     std::lock_guard<std::mutex> lock(filter_mutex_);
     ++tf_drops_;
   }
-  const char* why = reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the cloud has an empty frame_id"
-                    : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "the cloud is older than the tf buffer"
-                                                                           : "no transform within the queue";
+  const char* why =
+      reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the cloud has an empty frame_id"
+      : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "the cloud is older than the tf buffer"
+                                                              : "no transform within the queue";
   NODELET_WARN_THROTTLE(kThrottleS,
                         "dynamic_grid: dropping the scan of %s at t=%.3f: no tf %s <- '%s' at its stamp (%s)",
                         sub_points_.getTopic().c_str(), cloud_msg->header.stamp.toSec(), fixed_frame_.c_str(),
@@ -214,9 +217,10 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   {
     if (!field_error_reported_)
     {
-      NODELET_ERROR("dynamic_grid: cannot use the clouds of %s (frame '%s'): %s; they need float32 x, y, z "
-                    "fields. Reported once; these clouds are dropped.",
-                    sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), field_error.c_str());
+      NODELET_ERROR(
+          "dynamic_grid: cannot use the clouds of %s (frame '%s'): %s; they need float32 x, y, z "
+          "fields. Reported once; these clouds are dropped.",
+          sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), field_error.c_str());
       field_error_reported_ = true;
     }
     return;
@@ -224,15 +228,15 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   Eigen::Isometry3d world_from_sensor;
   try
   {
-    world_from_sensor =
-        tf2::transformToEigen(tf_buffer_->lookupTransform(fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp));
+    world_from_sensor = tf2::transformToEigen(
+        tf_buffer_->lookupTransform(fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp));
   }
   catch (const tf2::TransformException& e)
   {
     ++tf_drops_;
     NODELET_WARN_THROTTLE(kThrottleS, "dynamic_grid: dropping the scan of %s: tf %s <- %s: %s",
-                          sub_points_.getTopic().c_str(), fixed_frame_.c_str(), cloud_msg->header.frame_id.c_str(),
-                          e.what());
+                          sub_points_.getTopic().c_str(), fixed_frame_.c_str(),
+                          cloud_msg->header.frame_id.c_str(), e.what());
     return;
   }
   const DynamicGridCycle cycle = filter_->update(view, world_from_sensor, cloud_msg->header.stamp.toSec());
@@ -271,7 +275,8 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   {
     pub_grid_.publish(dynamicGridToMsg(*filter_, header));
   }
-  last_processing_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  last_processing_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   max_processing_ms_ = std::max(max_processing_ms_, last_processing_ms_);
 }
 
@@ -284,8 +289,8 @@ void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   }
   else if (last_processing_ms_ > budget_ms)
   {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "processing %.1f ms exceeds the scan period %.1f ms",
-                    last_processing_ms_, budget_ms);
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "processing %.1f ms exceeds the scan period %.1f ms", last_processing_ms_, budget_ms);
   }
   else
   {

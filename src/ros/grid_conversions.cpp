@@ -1,7 +1,7 @@
 #include "grid_vision_fusion/ros/grid_conversions.h"
 
-#include <boost/make_shared.hpp>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -50,7 +50,8 @@ DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
   readParam(nh, "seed", seed);
   if (seed < 0)
   {
-    throw std::invalid_argument("parameter " + nh.resolveName("seed") + " must be >= 0, got " + std::to_string(seed));
+    throw std::invalid_argument("parameter " + nh.resolveName("seed") + " must be >= 0, got " +
+                                std::to_string(seed));
   }
   c.seed = static_cast<std::uint32_t>(seed);
   readParam(nh, "dynamic_threshold", c.dynamic_threshold);
@@ -99,7 +100,8 @@ std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudVi
     }
     if (found->offset + sizeof(float) > cloud.point_step)
     {
-      return std::string("field '") + names[k] + "' lies beyond point_step " + std::to_string(cloud.point_step);
+      return std::string("field '") + names[k] + "' lies beyond point_step " +
+             std::to_string(cloud.point_step);
     }
     offsets[k] = found->offset;
   }
@@ -155,7 +157,8 @@ DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msg
   return msg;
 }
 
-nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter, const std_msgs::Header& header)
+nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter,
+                                                const std_msgs::Header& header)
 {
   auto msg = boost::make_shared<nav_msgs::OccupancyGrid>();
   msg->header = header;
@@ -183,14 +186,16 @@ nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter,
   return msg;
 }
 
-sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter, const std_msgs::Header& header)
+sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter,
+                                               const std_msgs::Header& header)
 {
   auto msg = boost::make_shared<sensor_msgs::PointCloud2>();
   msg->header = header;
   sensor_msgs::PointCloud2Modifier modifier(*msg);
-  modifier.setPointCloud2Fields(7, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32,
-                                "z", 1, sensor_msgs::PointField::FLOAT32, "rgb", 1, sensor_msgs::PointField::FLOAT32,
-                                "vx", 1, sensor_msgs::PointField::FLOAT32, "vy", 1, sensor_msgs::PointField::FLOAT32,
+  modifier.setPointCloud2Fields(7, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1,
+                                sensor_msgs::PointField::FLOAT32, "z", 1, sensor_msgs::PointField::FLOAT32,
+                                "rgb", 1, sensor_msgs::PointField::FLOAT32, "vx", 1,
+                                sensor_msgs::PointField::FLOAT32, "vy", 1, sensor_msgs::PointField::FLOAT32,
                                 "p_dynamic", 1, sensor_msgs::PointField::FLOAT32);
   const GridGeometry& g = filter.geometry();
   const CellStates& s = filter.cells();
@@ -219,9 +224,11 @@ sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter, 
       p[0] = static_cast<float>(g.cellCenterX(col));
       p[1] = static_cast<float>(g.cellCenterY(row));
       p[2] = z;
-      p[3] = c == CellClass::kDynamic
-                 ? packRgb(0, static_cast<std::uint8_t>(std::lround(255.0F * std::clamp(s.p_dynamic[i], 0.0F, 1.0F))), 0)
-                 : blue;
+      p[3] = c == CellClass::kDynamic ? packRgb(0,
+                                                static_cast<std::uint8_t>(std::lround(
+                                                    255.0F * std::clamp(s.p_dynamic[i], 0.0F, 1.0F))),
+                                                0)
+                                      : blue;
       p[4] = s.vx[i];
       p[5] = s.vy[i];
       p[6] = s.p_dynamic[i];

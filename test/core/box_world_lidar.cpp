@@ -12,8 +12,8 @@ namespace
 constexpr double kDeg = M_PI / 180.0;
 
 // Ray-box intersection (slab method) in the box frame; returns the entry distance or +inf.
-double intersectBox(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Box& box, double ground_z,
-                    double c, double s)
+double intersectBox(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Box& box,
+                    double ground_z, double c, double s)
 {
   const Eigen::Vector3d rel(origin.x() - box.x, origin.y() - box.y, origin.z() - (ground_z + box.bottom));
   const Eigen::Vector3d o(c * rel.x() + s * rel.y(), -s * rel.x() + c * rel.y(), rel.z());
@@ -77,7 +77,8 @@ std::vector<double> BoxWorldLidar::hdl64Elevations()
   return el;
 }
 
-std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_sensor, const std::vector<Box>& boxes)
+std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_sensor,
+                                       const std::vector<Box>& boxes)
 {
   std::vector<float> points;
   points.reserve(directions_.size() * 3);
@@ -118,7 +119,8 @@ std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_senso
     if (config_.range_noise_sigma > 0.0)
     {
       // Box-Muller on a splitmix64 stream: deterministic for the seed.
-      auto next = [this] {
+      auto next = [this]
+      {
         std::uint64_t z = (noise_state_ += 0x9E3779B97F4A7C15ULL);
         z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
         z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;

@@ -47,7 +47,8 @@ DynamicGridCycle step(DynamicGridFilter& filter, BoxWorldLidar& lidar, const Eig
                       const std::vector<Box>& boxes, double stamp)
 {
   const std::vector<float> xyz = lidar.scan(pose, boxes);
-  const DynamicGridCycle cycle = filter.update(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, stamp);
+  const DynamicGridCycle cycle =
+      filter.update(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, stamp);
   expectValidProbabilities(filter);
   return cycle;
 }
@@ -122,7 +123,8 @@ TEST(DynamicGridFilter, GridCentreFifteenMetresAheadByWholeCells)
   DynamicGridFilter filter(testConfig());
   const std::vector<float> none;
   // Sensor at (3.05, -2.0) heading +y: centre wanted at (3.05, 13.0).
-  filter.update(PointCloudView::packedXyz(none.data(), 0), sensorPose(3.05, -2.0, kSensorHeight, M_PI / 2), 0.0);
+  filter.update(PointCloudView::packedXyz(none.data(), 0), sensorPose(3.05, -2.0, kSensorHeight, M_PI / 2),
+                0.0);
   const GridGeometry& g = filter.geometry();
   const double cx = g.originX() + 0.5 * g.width * g.resolution;
   const double cy = g.originY() + 0.5 * g.height * g.resolution;
@@ -130,8 +132,8 @@ TEST(DynamicGridFilter, GridCentreFifteenMetresAheadByWholeCells)
   EXPECT_NEAR(cy, 13.0, 0.1 + 1e-9);
   EXPECT_NEAR(std::remainder(g.originX(), 0.2), 0.0, 1e-9);  // on the fixed lattice
   // Moving 1.03 m along +x moves the grid by 5 cells.
-  const DynamicGridCycle cycle =
-      filter.update(PointCloudView::packedXyz(none.data(), 0), sensorPose(4.08, -2.0, kSensorHeight, M_PI / 2), 0.1);
+  const DynamicGridCycle cycle = filter.update(PointCloudView::packedXyz(none.data(), 0),
+                                               sensorPose(4.08, -2.0, kSensorHeight, M_PI / 2), 0.1);
   EXPECT_EQ(cycle.shift_cols, 5);
   EXPECT_EQ(cycle.shift_rows, 0);
 }
@@ -320,7 +322,8 @@ TEST(DynamicGridFilter, EmptyScanIsAPredictionStep)
   // P(E) = P(E) (1 - eps_E->S - eps_E->D - eps_E->U) + P(U) eps_U->E over one period.
   const DynamicGridConfig& c = filter.config();
   const double leave = c.eps_free_to_static + c.eps_free_to_dynamic + c.eps_free_to_unknown;
-  EXPECT_NEAR(filter.cells().p_free[i], free_before * (1.0 - leave) + unknown_before * c.eps_unknown_to_free, 1e-4);
+  EXPECT_NEAR(filter.cells().p_free[i], free_before * (1.0 - leave) + unknown_before * c.eps_unknown_to_free,
+              1e-4);
 }
 
 TEST(DynamicGridFilter, DeterministicForASeed)

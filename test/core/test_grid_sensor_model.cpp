@@ -72,26 +72,28 @@ TEST(InverseSensorModel, FreeBeforeTheBoxOccupiedAtItUnknownBehind)
   const auto p_free = static_cast<float>(config.p_free);
   InverseSensorModel model(config);
   std::vector<float> occ;
-  const InverseSensorModelStats stats = model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
+  const InverseSensorModelStats stats =
+      model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
   ASSERT_EQ(occ.size(), g.cellCount());
   EXPECT_EQ(stats.invalid_points, 0U);
   EXPECT_GT(stats.obstacle_points, 100U);
   EXPECT_GT(stats.ground_points, 10000U);
 
-  EXPECT_FLOAT_EQ(at(occ, g, 10.0, 0.1), p_free);   // free in front
+  EXPECT_FLOAT_EQ(at(occ, g, 10.0, 0.1), p_free);  // free in front
   EXPECT_FLOAT_EQ(at(occ, g, 14.05, 0.1), p_occ);  // holds obstacle points
   EXPECT_FLOAT_EQ(at(occ, g, 14.05, -1.9), p_occ);
-  EXPECT_FLOAT_EQ(at(occ, g, 20.0, 0.1), 0.5F);   // in its shadow
+  EXPECT_FLOAT_EQ(at(occ, g, 20.0, 0.1), 0.5F);  // in its shadow
   EXPECT_FLOAT_EQ(at(occ, g, 40.0, 0.1), 0.5F);
   EXPECT_FLOAT_EQ(at(occ, g, 10.0, 10.1), p_free);  // free beside it
   EXPECT_FLOAT_EQ(at(occ, g, -10.0, 0.1), p_free);  // free behind the vehicle
-  EXPECT_FLOAT_EQ(at(occ, g, 1.0, 0.1), 0.5F);    // inside min_range: not observed
+  EXPECT_FLOAT_EQ(at(occ, g, 1.0, 0.1), 0.5F);      // inside min_range: not observed
   // Occupied band: the nearest hit of the sector [0, 0.5) deg is the face point at (14, 0);
   // cell centre (13.9, 0.1) lies d = hypot(13.9, 0.1) - 14 = -0.0996 m before it:
   // p = p_free + (p_occ - p_free) exp(-d^2 / (2 sigma^2)) = 0.845.
   const double d = std::hypot(13.9, 0.1) - 14.0;
   EXPECT_NEAR(at(occ, g, 13.9, 0.1),
-              p_free + (p_occ - p_free) * std::exp(-d * d / (2.0 * config.range_sigma * config.range_sigma)), 0.005);
+              p_free + (p_occ - p_free) * std::exp(-d * d / (2.0 * config.range_sigma * config.range_sigma)),
+              0.005);
   // 1 m behind the hit (5 sigma): no information.
   EXPECT_FLOAT_EQ(at(occ, g, 15.1, 0.1), 0.5F);
   // Cells holding obstacle points are occupied even at long range.
@@ -119,7 +121,8 @@ TEST(InverseSensorModel, SlopedGroundIsNotAnObstacle)
   InverseSensorModel model{config};
   std::vector<float> occ;
   const std::vector<float> xyz = lidar.scan(pose, {});
-  const InverseSensorModelStats stats = model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
+  const InverseSensorModelStats stats =
+      model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
   // A fixed z threshold of 0.3 m above the sensor's ground would call the slope occupied from
   // about 4.3 m on (0.3 / tan 4 deg); the per-sector ground estimate follows it.
   EXPECT_EQ(stats.obstacle_points, 0U);
@@ -146,7 +149,8 @@ TEST(InverseSensorModel, NanPointsAreDroppedAndCounted)
   xyz.insert(xyz.end(), {nan, 0.0F, 0.0F, 1.0F, inf, 0.0F, 5.0F, 0.0F, -inf});
   InverseSensorModel model{InverseSensorModelConfig()};
   std::vector<float> occ;
-  const InverseSensorModelStats stats = model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
+  const InverseSensorModelStats stats =
+      model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, occ);
   EXPECT_EQ(stats.invalid_points, 3U);
   EXPECT_EQ(stats.points, xyz.size() / 3);
   EXPECT_EQ(stats.occupied_cells, 0U);

@@ -51,9 +51,9 @@ sensor_msgs::PointCloud2::Ptr makeCloud(const ros::Time& stamp, const std::strin
   cloud->header.stamp = stamp;
   cloud->header.frame_id = frame;
   sensor_msgs::PointCloud2Modifier modifier(*cloud);
-  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32,
-                                "z", 1, sensor_msgs::PointField::FLOAT32, "intensity", 1,
-                                sensor_msgs::PointField::FLOAT32);
+  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1,
+                                sensor_msgs::PointField::FLOAT32, "z", 1, sensor_msgs::PointField::FLOAT32,
+                                "intensity", 1, sensor_msgs::PointField::FLOAT32);
   std::vector<std::array<float, 3>> points;
   for (int ring = 0; ring < 20; ++ring)
   {
@@ -74,7 +74,8 @@ sensor_msgs::PointCloud2::Ptr makeCloud(const ros::Time& stamp, const std::strin
   {
     for (int k = 0; k < 8; ++k)
     {
-      points.push_back({static_cast<float>(wall), 0.1F * static_cast<float>(i), -1.3F + 0.2F * static_cast<float>(k)});
+      points.push_back(
+          {static_cast<float>(wall), 0.1F * static_cast<float>(i), -1.3F + 0.2F * static_cast<float>(k)});
     }
   }
   modifier.resize(points.size());
@@ -96,13 +97,16 @@ protected:
   void SetUp() override
   {
     pub_points_ = nh_.advertise<sensor_msgs::PointCloud2>("points", 10);
-    sub_grid_ = nh_.subscribe<DynamicGrid>("grid", 10, [this](const DynamicGrid::ConstPtr& m) { grids_.push_back(m); });
-    sub_occupancy_ = nh_.subscribe<nav_msgs::OccupancyGrid>(
-        "grid/occupancy", 10, [this](const nav_msgs::OccupancyGrid::ConstPtr& m) { occupancies_.push_back(m); });
+    sub_grid_ = nh_.subscribe<DynamicGrid>("grid", 10,
+                                           [this](const DynamicGrid::ConstPtr& m) { grids_.push_back(m); });
+    sub_occupancy_ = nh_.subscribe<nav_msgs::OccupancyGrid>("grid/occupancy", 10,
+                                                            [this](const nav_msgs::OccupancyGrid::ConstPtr& m)
+                                                            { occupancies_.push_back(m); });
     sub_cells_ = nh_.subscribe<sensor_msgs::PointCloud2>(
         "grid/cells", 10, [this](const sensor_msgs::PointCloud2::ConstPtr& m) { cells_.push_back(m); });
     ASSERT_TRUE(waitFor(
-        [this] {
+        [this]
+        {
           return pub_points_.getNumSubscribers() > 0 && sub_grid_.getNumPublishers() > 0 &&
                  sub_occupancy_.getNumPublishers() > 0 && sub_cells_.getNumPublishers() > 0;
         },
@@ -128,9 +132,11 @@ protected:
   bool waitForStamp(const ros::Time& stamp, double timeout_s = 10.0)
   {
     return waitFor(
-        [&] {
+        [&]
+        {
           return !grids_.empty() && grids_.back()->header.stamp == stamp && !occupancies_.empty() &&
-                 occupancies_.back()->header.stamp == stamp && !cells_.empty() && cells_.back()->header.stamp == stamp;
+                 occupancies_.back()->header.stamp == stamp && !cells_.empty() &&
+                 cells_.back()->header.stamp == stamp;
         },
         timeout_s);
   }
@@ -180,7 +186,8 @@ TEST_F(DynamicGridNodeletTest, PublishesAllThreeOutputsAndSurvivesBadInput)
   {
     ASSERT_NEAR(grid.p_static[i] + grid.p_dynamic[i] + grid.p_free[i] + grid.p_unknown[i], 1.0F, 1e-4F) << i;
   }
-  auto index = [&](double x, double y) {
+  auto index = [&](double x, double y)
+  {
     const auto col = static_cast<std::size_t>(std::floor((x - grid.info.origin.position.x) / 0.2));
     const auto row = static_cast<std::size_t>(std::floor((y - grid.info.origin.position.y) / 0.2));
     return row * 300 + col;
@@ -242,9 +249,9 @@ TEST_F(DynamicGridNodeletTest, PublishesAllThreeOutputsAndSurvivesBadInput)
   auto no_z = boost::make_shared<sensor_msgs::PointCloud2>();
   no_z->header.stamp = stamp;
   no_z->header.frame_id = kLidarFrame;
-  sensor_msgs::PointCloud2Modifier(*no_z).setPointCloud2Fields(
-      3, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
-      sensor_msgs::PointField::FLOAT64);
+  sensor_msgs::PointCloud2Modifier(*no_z).setPointCloud2Fields(3, "x", 1, sensor_msgs::PointField::FLOAT32,
+                                                               "y", 1, sensor_msgs::PointField::FLOAT32, "z",
+                                                               1, sensor_msgs::PointField::FLOAT64);
   sensor_msgs::PointCloud2Modifier(*no_z).resize(10);
   send(no_z, 1.6);
   EXPECT_FALSE(waitForStamp(stamp, 1.0)) << "a cloud with a float64 z produced a grid";

@@ -21,14 +21,14 @@ namespace grid_vision_fusion
 struct DynamicGridConfig
 {
   // --- grid ---
-  int width = 300;              ///< cells along x [cells] (8..4000)
-  int height = 300;             ///< cells along y [cells] (8..4000)
-  double resolution = 0.2;      ///< cell edge [m] (0.01..5)
-  double lookahead = 15.0;      ///< grid centre this far ahead of the sensor along its heading [m]
+  int width = 300;          ///< cells along x [cells] (8..4000)
+  int height = 300;         ///< cells along y [cells] (8..4000)
+  double resolution = 0.2;  ///< cell edge [m] (0.01..5)
+  double lookahead = 15.0;  ///< grid centre this far ahead of the sensor along its heading [m]
 
   // --- time ---
-  double max_time_gap = 1.0;         ///< a larger gap between scans resets the grid [s] (>0)
-  double transition_period = 0.1;    ///< period the eps_* probabilities refer to [s] (>0)
+  double max_time_gap = 1.0;       ///< a larger gap between scans resets the grid [s] (>0)
+  double transition_period = 0.1;  ///< period the eps_* probabilities refer to [s] (>0)
 
   // --- transitions: probability of leaving state X for Y within transition_period ---
   double eps_static_to_dynamic = 0.005;
@@ -43,12 +43,12 @@ struct DynamicGridConfig
   double eps_unknown_to_free = 0.02;
 
   // --- particles ---
-  int particle_count = 1 << 17;        ///< particles carrying the dynamic mass (16..2^24)
-  double birth_fraction = 0.1;         ///< newborn particles per cycle / particle_count (0..1]
-  double birth_velocity_sigma = 4.0;   ///< std-dev of a newborn particle's velocity per axis [m/s] (>0)
-  double acceleration_sigma = 2.0;     ///< process noise, std-dev of the acceleration per axis [m/s^2] (>=0)
-  double max_speed = 50.0;             ///< particles faster than this are dropped [m/s] (>0)
-  std::uint32_t seed = 42;             ///< seed of the std::mt19937 (same seed + input = same output)
+  int particle_count = 1 << 17;       ///< particles carrying the dynamic mass (16..2^24)
+  double birth_fraction = 0.1;        ///< newborn particles per cycle / particle_count (0..1]
+  double birth_velocity_sigma = 4.0;  ///< std-dev of a newborn particle's velocity per axis [m/s] (>0)
+  double acceleration_sigma = 2.0;    ///< process noise, std-dev of the acceleration per axis [m/s^2] (>=0)
+  double max_speed = 50.0;            ///< particles faster than this are dropped [m/s] (>0)
+  std::uint32_t seed = 42;            ///< seed of the std::mt19937 (same seed + input = same output)
 
   // --- classification (reporting only, the filter does not use it) ---
   double dynamic_threshold = 0.5;      ///< P(D) from which a cell may be dynamic (0..1]
@@ -65,14 +65,14 @@ struct DynamicGridConfig
 /// What one cycle did.
 struct DynamicGridCycle
 {
-  bool reset = false;          ///< the grid was reset before this scan (time jump or gap)
-  std::string reset_reason;    ///< why, for the caller's warning; empty when reset is false
-  double dt = 0.0;             ///< time since the previous scan [s] (0 on the first one)
-  std::int64_t shift_cols = 0;  ///< grid moved by this many cells along x
-  std::int64_t shift_rows = 0;  ///< grid moved by this many cells along y
+  bool reset = false;                ///< the grid was reset before this scan (time jump or gap)
+  std::string reset_reason;          ///< why, for the caller's warning; empty when reset is false
+  double dt = 0.0;                   ///< time since the previous scan [s] (0 on the first one)
+  std::int64_t shift_cols = 0;       ///< grid moved by this many cells along x
+  std::int64_t shift_rows = 0;       ///< grid moved by this many cells along y
   std::size_t particles_in_use = 0;  ///< particles with a non-zero weight after resampling
   std::size_t particles_born = 0;
-  InverseSensorModelStats sensor;   ///< counters of the inverse sensor model
+  InverseSensorModelStats sensor;     ///< counters of the inverse sensor model
   double sensor_model_seconds = 0.0;  ///< wall time of the inverse sensor model [s]
   double filter_seconds = 0.0;        ///< wall time of everything else in the cycle [s]
 };
@@ -89,11 +89,11 @@ enum class CellClass : std::uint8_t
 /// Particles as a structure of arrays; positions relative to the corner of grid cell (0,0).
 struct ParticleArrays
 {
-  std::vector<float> x;       ///< [m] from the grid origin along +x
-  std::vector<float> y;       ///< [m] from the grid origin along +y
-  std::vector<float> vx;      ///< [m/s]
-  std::vector<float> vy;      ///< [m/s]
-  std::vector<float> weight;  ///< absolute dynamic mass; the sum over a cell is its persistent P(D)
+  std::vector<float> x;            ///< [m] from the grid origin along +x
+  std::vector<float> y;            ///< [m] from the grid origin along +y
+  std::vector<float> vx;           ///< [m/s]
+  std::vector<float> vy;           ///< [m/s]
+  std::vector<float> weight;       ///< absolute dynamic mass; the sum over a cell is its persistent P(D)
   std::vector<std::int32_t> cell;  ///< row-major cell index, -1 when outside the grid
 
   void resize(std::size_t n);
@@ -113,7 +113,8 @@ public:
   /// prediction, Bayes update, persistent/newborn split, velocity statistics, birth,
   /// resampling. An empty cloud gives a prediction step only. A stamp before the previous one
   /// or more than max_time_gap after it resets the grid first (reported in the result).
-  DynamicGridCycle update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor, double stamp);
+  DynamicGridCycle update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
+                          double stamp);
 
   /// Forgets everything: all cells unknown, no particle, the generator re-seeded.
   void reset();
@@ -152,10 +153,10 @@ private:
   ParticleArrays resampled_;
   std::vector<float> occupancy_;
   // per-cell scratch
-  std::vector<float> pred_dynamic_;     // persistent predicted dynamic mass (particles)
+  std::vector<float> pred_dynamic_;          // persistent predicted dynamic mass (particles)
   std::vector<float> from_dynamic_static_;   // D -> S mass arriving with particles
   std::vector<float> from_dynamic_unknown_;  // D -> U mass arriving with particles
-  std::vector<float> newborn_;          // posterior newborn dynamic mass
+  std::vector<float> newborn_;               // posterior newborn dynamic mass
   std::vector<float> persistent_factor_;
   std::vector<float> stat_w_, stat_vx_, stat_vy_, stat_vxx_, stat_vyy_;
   // birth scratch

@@ -14,9 +14,9 @@ namespace grid_vision_fusion
 /// two integers, which is why following the vehicle never resamples (no drift).
 struct GridGeometry
 {
-  int width = 300;          ///< cells along +x (columns)
-  int height = 300;         ///< cells along +y (rows)
-  double resolution = 0.2;  ///< cell edge [m]
+  int width = 300;              ///< cells along +x (columns)
+  int height = 300;             ///< cells along +y (rows)
+  double resolution = 0.2;      ///< cell edge [m]
   std::int64_t origin_col = 0;  ///< lattice column of grid cell (0,0)
   std::int64_t origin_row = 0;  ///< lattice row of grid cell (0,0)
 

@@ -36,18 +36,18 @@ struct PointCloudView
 /// Parameters of the inverse sensor model. Defaults: Velodyne HDL-64E on KITTI.
 struct InverseSensorModelConfig
 {
-  double sensor_height = 1.73;          ///< lidar above the ground, first ground guess [m] (>0)
-  double min_range = 2.5;               ///< horizontal range below which points are ignored (ego body) [m] (>=0)
-  double max_range = 70.0;              ///< horizontal range beyond which points are ignored [m] (> min_range)
-  double angular_resolution = 0.5;      ///< width of a polar sector [deg] (0.05..10)
-  double range_resolution = 0.2;        ///< length of a range bin of the ground estimate [m] (>0)
-  double max_ground_slope = 0.15;       ///< largest ground gradient along a sector [m/m] (>=0)
-  double ground_tolerance = 0.15;       ///< ground step allowed between consecutive ground bins [m] (>=0)
-  double min_obstacle_height = 0.3;     ///< obstacle points start this far above the ground [m] (>0)
-  double max_obstacle_height = 2.5;     ///< points higher above the ground are overhangs, ignored [m]
-  double p_occupied = 0.95;             ///< P(occupied) at an obstacle hit (0.5, 1)
-  double p_free = 0.05;                 ///< P(occupied) of a cell seen free (0, 0.5)
-  double range_sigma = 0.2;             ///< std-dev of the hit range, width of the occupied band [m] (>0)
+  double sensor_height = 1.73;       ///< lidar above the ground, first ground guess [m] (>0)
+  double min_range = 2.5;            ///< horizontal range below which points are ignored (ego body) [m] (>=0)
+  double max_range = 70.0;           ///< horizontal range beyond which points are ignored [m] (> min_range)
+  double angular_resolution = 0.5;   ///< width of a polar sector [deg] (0.05..10)
+  double range_resolution = 0.2;     ///< length of a range bin of the ground estimate [m] (>0)
+  double max_ground_slope = 0.15;    ///< largest ground gradient along a sector [m/m] (>=0)
+  double ground_tolerance = 0.15;    ///< ground step allowed between consecutive ground bins [m] (>=0)
+  double min_obstacle_height = 0.3;  ///< obstacle points start this far above the ground [m] (>0)
+  double max_obstacle_height = 2.5;  ///< points higher above the ground are overhangs, ignored [m]
+  double p_occupied = 0.95;          ///< P(occupied) at an obstacle hit (0.5, 1)
+  double p_free = 0.05;              ///< P(occupied) of a cell seen free (0, 0.5)
+  double range_sigma = 0.2;          ///< std-dev of the hit range, width of the occupied band [m] (>0)
 
   /// @throws std::invalid_argument naming the first field out of its range.
   void validate() const;
@@ -56,9 +56,9 @@ struct InverseSensorModelConfig
 /// Counters of one scan.
 struct InverseSensorModelStats
 {
-  std::size_t points = 0;           ///< points in the view
-  std::size_t invalid_points = 0;   ///< NaN/Inf coordinates, dropped
-  std::size_t out_of_range = 0;     ///< outside [min_range, max_range] horizontally
+  std::size_t points = 0;          ///< points in the view
+  std::size_t invalid_points = 0;  ///< NaN/Inf coordinates, dropped
+  std::size_t out_of_range = 0;    ///< outside [min_range, max_range] horizontally
   std::size_t ground_points = 0;
   std::size_t obstacle_points = 0;
   std::size_t overhang_points = 0;  ///< above max_obstacle_height over the ground
@@ -92,13 +92,13 @@ private:
   int sectors_ = 0;
   int range_bins_ = 0;
   float sectors_per_rad_ = 0.0F;
-  std::vector<float> bin_min_z_;        // per (sector, range bin): lowest z relative to the sensor
-  std::vector<float> ground_z_;         // per (sector, range bin): ground estimate
-  std::vector<float> first_hit_;        // per sector: range of the nearest obstacle point
-  std::vector<float> farthest_return_;  // per sector: range of the farthest valid point
+  std::vector<float> bin_min_z_;         // per (sector, range bin): lowest z relative to the sensor
+  std::vector<float> ground_z_;          // per (sector, range bin): ground estimate
+  std::vector<float> first_hit_;         // per sector: range of the nearest obstacle point
+  std::vector<float> farthest_return_;   // per sector: range of the farthest valid point
   std::vector<std::int32_t> point_bin_;  // per point: sector * range_bins + bin, -1 when dropped
-  std::vector<float> point_dz_;         // per point: z relative to the sensor, world-aligned
-  std::vector<float> point_x_;          // per point: x relative to the sensor, world-aligned
+  std::vector<float> point_dz_;          // per point: z relative to the sensor, world-aligned
+  std::vector<float> point_x_;           // per point: x relative to the sensor, world-aligned
   std::vector<float> point_y_;
   std::vector<std::uint8_t> cell_hit_;  // per cell: holds obstacle points
 };

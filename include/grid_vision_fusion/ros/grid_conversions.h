@@ -29,11 +29,13 @@ DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msg
 
 /// nav_msgs/OccupancyGrid of the filter's grid: -1 where P(U) >= 0.5, otherwise
 /// round(100 (P(S) + P(D)) / (1 - P(U))) in [0, 100].
-nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter, const std_msgs::Header& header);
+nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter,
+                                                const std_msgs::Header& header);
 
 /// One point per occupied cell (CellClass static or dynamic) for rviz, at the cell centre and
 /// the ground height below the sensor; fields x, y, z, rgb, vx, vy, p_dynamic (float32).
 /// Static cells blue (0, 0, 255); dynamic cells green (0, round(255 P(D)), 0).
-sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter, const std_msgs::Header& header);
+sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter,
+                                               const std_msgs::Header& header);
 
 }  // namespace grid_vision_fusion
