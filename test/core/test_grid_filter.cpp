@@ -198,6 +198,43 @@ TEST(DynamicGridFilter, MovingBoxBecomesDynamicWithItsVelocity)
   EXPECT_LT(std::fabs(std::atan2(vy, vx)), 10.0 * M_PI / 180.0) << "vx " << vx << " vy " << vy;
 }
 
+TEST(DynamicGridFilter, ClassificationThresholdsOnlyChangeReporting)
+{
+  DynamicGridFilter filter(testConfig());
+  BoxWorldLidar lidar;
+  const auto pose = sensorPose(35.0, 0.0, kSensorHeight, M_PI);
+  Box box;
+  box.y = 0.5;
+  box.height = 1.9;
+  for (int k = 0; k < 10; ++k)
+  {
+    box.x = 8.0 + 5.0 * k * kPeriod;
+    step(filter, lidar, pose, {box}, k * kPeriod);
+  }
+  const std::vector<std::size_t> cells = observedBoxCells(filter, box);
+  ASSERT_FALSE(cells.empty());
+  const std::vector<float> p_dynamic = filter.cells().p_dynamic;
+  auto count = [&](CellClass wanted)
+  {
+    std::size_t n = 0;
+    for (std::size_t i : cells)
+    {
+      n += filter.classify(i) == wanted ? 1 : 0;
+    }
+    return n;
+  };
+  ASSERT_GT(count(CellClass::kDynamic), 0U);
+  DynamicGridConfig thresholds = filter.config();
+  thresholds.min_dynamic_speed = 10.0;  // 5 m/s is no longer dynamic: reported static
+  filter.setClassification(thresholds);
+  EXPECT_EQ(count(CellClass::kDynamic), 0U);
+  EXPECT_EQ(count(CellClass::kStatic), cells.size());
+  EXPECT_EQ(filter.cells().p_dynamic, p_dynamic);
+  thresholds.occupied_threshold = 1.5;
+  EXPECT_THROW(filter.setClassification(thresholds), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(filter.config().occupied_threshold, 0.5);
+}
+
 TEST(DynamicGridFilter, FreeSpaceBecomesFreeAndTheShadowStaysUnknown)
 {
   DynamicGridFilter filter(testConfig());
