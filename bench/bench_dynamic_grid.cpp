@@ -1,0 +1,222 @@
+// Benchmark of the dynamic grid on KITTI-sized scans (64 beams, ~120 k points) of a box world:
+// a street with buildings, parked and moving cars, the ego vehicle driving at 10 m/s.
+// Reports, per scan, the median of the inverse sensor model, of the rest of the filter cycle
+// and of the whole cycle [ms] (counters *_median_ms), for the default grid and particle count,
+// for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells. Not a test: run it by hand,
+//   devel/lib/grid_vision_fusion/bench_dynamic_grid
+// and record the figures in doc/benchmarks_dynamic_grid.md.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <ctime>
+#include <vector>
+
+#include "box_world_lidar.h"
+#include "grid_vision_fusion/core/dynamic_grid_filter.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+using testing::Box;
+using testing::BoxWorldLidar;
+using testing::BoxWorldLidarConfig;
+using testing::sensorPose;
+
+constexpr int kScans = 40;
+constexpr double kPeriod = 0.1;
+constexpr double kEgoSpeed = 10.0;
+
+struct Scan
+{
+  Eigen::Isometry3d pose;
+  std::vector<float> xyz;
+};
+
+const std::vector<Scan>& scans()
+{
+  static const std::vector<Scan> sequence = []
+  {
+    BoxWorldLidarConfig config;
+    config.horizontal_resolution_deg = 0.18;  // 2000 columns x 64 beams, ~120 k points
+    config.range_noise_sigma = 0.02;
+    BoxWorldLidar lidar(config);
+    std::vector<Scan> out;
+    for (int k = 0; k < kScans; ++k)
+    {
+      const double t = k * kPeriod;
+      std::vector<Box> boxes;
+      for (double side : {-1.0, 1.0})  // buildings
+      {
+        for (int b = -3; b < 12; ++b)
+        {
+          Box building;
+          building.x = b * 14.0;
+          building.y = side * 16.0;
+          building.length = 12.0;
+          building.width = 6.0;
+          building.height = 8.0;
+          boxes.push_back(building);
+        }
+      }
+      for (int c = -2; c < 14; ++c)  // parked cars
+      {
+        Box car;
+        car.x = c * 7.0 + 2.0;
+        car.y = (c % 2 == 0 ? 1.0 : -1.0) * 6.5;
+        boxes.push_back(car);
+      }
+      Box oncoming;  // moving cars
+      oncoming.x = 60.0 - 10.0 * t;
+      oncoming.y = -2.0;
+      boxes.push_back(oncoming);
+      Box ahead;
+      ahead.x = 15.0 + 8.0 * t;
+      ahead.y = 2.0;
+      boxes.push_back(ahead);
+      Box crossing;
+      crossing.x = 25.0 + kEgoSpeed * t;
+      crossing.y = -12.0 + 4.0 * t;
+      crossing.yaw = M_PI / 2;
+      boxes.push_back(crossing);
+      const Eigen::Isometry3d pose = sensorPose(kEgoSpeed * t, 0.0, 1.73);
+      out.push_back({pose, lidar.scan(pose, boxes)});
+    }
+    return out;
+  }();
+  return sequence;
+}
+
+// CPU time of this thread [ms]: unlike wall time, not inflated when other processes share the cores.
+double threadCpuMs()
+{
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
+double median(std::vector<double> v)
+{
+  if (v.empty())
+  {
+    return 0.0;
+  }
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// One iteration = one filter cycle on the next scan of the sequence (warm: the first 10 scans
+// are run before timing; the sequence restarts with a reset outside the timing).
+void runCycles(benchmark::State& state, const DynamicGridConfig& config)
+{
+  const std::vector<Scan>& sequence = scans();
+  DynamicGridFilter filter(config);
+  int k = 0;
+  double stamp = 0.0;
+  double cpu_ms = 0.0;
+  auto next = [&]()
+  {
+    const Scan& scan = sequence[static_cast<std::size_t>(k)];
+    const double cpu_start = threadCpuMs();
+    const DynamicGridCycle cycle =
+        filter.update(PointCloudView::packedXyz(scan.xyz.data(), scan.xyz.size() / 3), scan.pose, stamp);
+    cpu_ms = threadCpuMs() - cpu_start;
+    stamp += kPeriod;
+    k = (k + 1) % kScans;
+    return cycle;
+  };
+  for (int warm = 0; warm < 10; ++warm)
+  {
+    next();
+  }
+  std::vector<double> model_ms;
+  std::vector<double> filter_ms;
+  std::vector<double> total_ms;
+  std::vector<double> total_cpu_ms;
+  std::size_t points = 0;
+  std::size_t in_use = 0;
+  for (auto _ : state)
+  {
+    if (k == 0)
+    {
+      state.PauseTiming();
+      filter.reset();
+      for (int warm = 0; warm < 10; ++warm)
+      {
+        next();
+      }
+      state.ResumeTiming();
+    }
+    const DynamicGridCycle cycle = next();
+    model_ms.push_back(1e3 * cycle.sensor_model_seconds);
+    filter_ms.push_back(1e3 * cycle.filter_seconds);
+    total_ms.push_back(1e3 * (cycle.sensor_model_seconds + cycle.filter_seconds));
+    total_cpu_ms.push_back(cpu_ms);
+    points = cycle.sensor.points;
+    in_use = cycle.particles_in_use;
+  }
+  state.counters["sensor_model_median_ms"] = median(model_ms);
+  state.counters["filter_median_ms"] = median(filter_ms);
+  state.counters["cycle_median_ms"] = median(total_ms);
+  state.counters["cycle_cpu_median_ms"] = median(total_cpu_ms);
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["particles_in_use"] = static_cast<double>(in_use);
+}
+
+void BM_SensorModel(benchmark::State& state)
+{
+  const DynamicGridConfig config;
+  InverseSensorModel model(config.sensor_model);
+  DynamicGridFilter placement(config);
+  const Scan& scan = scans()[10];
+  std::vector<float> dummy;
+  placement.update(PointCloudView::packedXyz(dummy.data(), 0), scan.pose, 0.0);
+  std::vector<float> occupancy;
+  for (auto _ : state)
+  {
+    const InverseSensorModelStats stats =
+        model.compute(PointCloudView::packedXyz(scan.xyz.data(), scan.xyz.size() / 3), scan.pose,
+                      placement.geometry(), occupancy);
+    benchmark::DoNotOptimize(stats);
+  }
+  state.counters["points"] = static_cast<double>(scan.xyz.size() / 3);
+}
+BENCHMARK(BM_SensorModel)->Unit(benchmark::kMillisecond);
+
+void BM_CycleDefaults(benchmark::State& state)
+{
+  runCycles(state, DynamicGridConfig());
+}
+BENCHMARK(BM_CycleDefaults)->Unit(benchmark::kMillisecond)->Iterations(200);
+
+void BM_CycleParticles(benchmark::State& state)
+{
+  DynamicGridConfig config;
+  config.particle_count = static_cast<int>(state.range(0));
+  runCycles(state, config);
+}
+BENCHMARK(BM_CycleParticles)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(100)
+    ->RangeMultiplier(2)
+    ->Range(1 << 15, 1 << 19);
+
+void BM_CycleCells(benchmark::State& state)
+{
+  DynamicGridConfig config;
+  config.width = static_cast<int>(state.range(0));
+  config.height = config.width;
+  runCycles(state, config);
+}
+BENCHMARK(BM_CycleCells)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(100)
+    ->Arg(150)
+    ->Arg(300)
+    ->Arg(450)
+    ->Arg(600);
+
+}  // namespace
+}  // namespace grid_vision_fusion
+
+BENCHMARK_MAIN();

@@ -1,0 +1,312 @@
+// grid_vision_fusion/dynamic_grid: lidar PointCloud2 + tf -> CMCDOT-style dynamic occupancy grid.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
+#include <dynamic_reconfigure/server.h>
+#include <message_filters/subscriber.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_listener.h>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
+
+#include <chrono>
+#include <memory>
+#include <mutex>
+
+#include "grid_vision_fusion/DynamicGrid.h"
+#include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
+#include "grid_vision_fusion/core/dynamic_grid_filter.h"
+#include "grid_vision_fusion/ros/grid_conversions.h"
+#include "grid_vision_fusion/ros/params.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kThrottleS = 5.0;
+}  // namespace
+
+class DynamicGridNodelet : public nodelet::Nodelet
+{
+  using ReconfigureServer = dynamic_reconfigure::Server<DynamicGridReconfigureConfig>;
+  using TfFilter = tf2_ros::MessageFilter<sensor_msgs::PointCloud2>;
+
+  void onInit() override;
+  void connectCb();
+  void cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg);
+  void tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg, tf2_ros::FilterFailureReason reason);
+  void reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t level);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  boost::mutex connect_mutex_;
+  std::mutex filter_mutex_;  // the filter, its statistics and the field-error flag
+  std::unique_ptr<DynamicGridFilter> filter_;
+  std::string fixed_frame_ = "world";
+  bool lazy_ = true;
+  int queue_size_ = 5;
+  double expected_rate_ = 10.0;
+  bool field_error_reported_ = false;
+
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  message_filters::Subscriber<sensor_msgs::PointCloud2> sub_points_;
+  std::unique_ptr<TfFilter> tf_filter_;
+
+  ros::Publisher pub_grid_;
+  ros::Publisher pub_occupancy_;
+  ros::Publisher pub_cells_;
+  std::unique_ptr<ReconfigureServer> reconfigure_server_;
+
+  // Diagnostics (under filter_mutex_).
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> input_rate_;
+  ros::WallTimer diagnostics_timer_;
+  double min_rate_ = 0.0;
+  double max_rate_ = 0.0;
+  double last_processing_ms_ = 0.0;
+  double max_processing_ms_ = 0.0;
+  std::size_t particles_in_use_ = 0;
+  std::size_t scans_ = 0;
+  std::size_t invalid_points_ = 0;
+  std::size_t resets_ = 0;
+  std::size_t tf_drops_ = 0;
+};
+
+void DynamicGridNodelet::onInit()
+{
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+
+  DynamicGridConfig config;
+  try
+  {
+    config = dynamicGridConfigFromParams(pnh);
+    readParam(pnh, "fixed_frame", fixed_frame_);
+    readParam(pnh, "lazy", lazy_);
+    readParam(pnh, "queue_size", queue_size_);
+    readParam(pnh, "expected_rate", expected_rate_);
+    if (fixed_frame_.empty())
+    {
+      throw std::invalid_argument("parameter ~fixed_frame must not be empty");
+    }
+    if (queue_size_ < 1)
+    {
+      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
+    }
+    if (!(expected_rate_ > 0.0))
+    {
+      throw std::invalid_argument("parameter ~expected_rate must be > 0 [Hz]");
+    }
+    filter_ = std::make_unique<DynamicGridFilter>(config);
+  }
+  catch (const std::exception& e)
+  {
+    NODELET_ERROR("dynamic_grid: invalid configuration, the nodelet stays inactive: %s", e.what());
+    return;
+  }
+
+  reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
+  reconfigure_server_->setCallback(boost::bind(&DynamicGridNodelet::reconfigureCb, this,
+                                               boost::placeholders::_1, boost::placeholders::_2));
+
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+  tf_filter_ = std::make_unique<TfFilter>(sub_points_, *tf_buffer_, fixed_frame_,
+                                          static_cast<std::uint32_t>(queue_size_), nh);
+  tf_filter_->registerCallback(boost::bind(&DynamicGridNodelet::cloudCb, this, boost::placeholders::_1));
+  tf_filter_->registerFailureCallback(
+      boost::bind(&DynamicGridNodelet::tfFailureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+
+  updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+  updater_->setHardwareID("none");
+  min_rate_ = 0.5 * expected_rate_;
+  max_rate_ = 2.0 * expected_rate_;
+  input_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 10), "input rate");
+  updater_->add(*input_rate_);
+  updater_->add("dynamic grid", this, &DynamicGridNodelet::diagnose);
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                                          [this](const ros::WallTimerEvent&)
+                                          {
+                                            std::lock_guard<std::mutex> lock(filter_mutex_);
+                                            updater_->update();
+                                          });
+
+  ros::SubscriberStatusCallback connect_cb = boost::bind(&DynamicGridNodelet::connectCb, this);
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  pub_grid_ = nh.advertise<DynamicGrid>("grid", 1, connect_cb, connect_cb);
+  pub_occupancy_ = nh.advertise<nav_msgs::OccupancyGrid>("grid/occupancy", 1, connect_cb, connect_cb);
+  pub_cells_ = nh.advertise<sensor_msgs::PointCloud2>("grid/cells", 1, connect_cb, connect_cb);
+  if (!lazy_)
+  {
+    sub_points_.subscribe(nh, "points", static_cast<std::uint32_t>(queue_size_));
+  }
+  NODELET_INFO("dynamic_grid: %dx%d cells of %.2f m in %s, %d particles, seed %u, %s", config.width,
+               config.height, config.resolution, fixed_frame_.c_str(), config.particle_count, config.seed,
+               lazy_ ? "lazy" : "always subscribed");
+}
+
+void DynamicGridNodelet::connectCb()
+{
+  boost::lock_guard<boost::mutex> lock(connect_mutex_);
+  if (!lazy_)
+  {
+    return;
+  }
+  const bool any_output = pub_grid_.getNumSubscribers() > 0 || pub_occupancy_.getNumSubscribers() > 0 ||
+                          pub_cells_.getNumSubscribers() > 0;
+  if (!any_output)
+  {
+    sub_points_.unsubscribe();
+  }
+  else if (!sub_points_.getSubscriber())
+  {
+    sub_points_.subscribe(getNodeHandle(), "points", static_cast<std::uint32_t>(queue_size_));
+  }
+}
+
+void DynamicGridNodelet::reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t /*level*/)
+{
+  std::lock_guard<std::mutex> lock(filter_mutex_);
+  DynamicGridConfig thresholds = filter_->config();
+  thresholds.dynamic_threshold = reconfigure.dynamic_threshold;
+  thresholds.min_dynamic_speed = reconfigure.min_dynamic_speed;
+  thresholds.mahalanobis_threshold = reconfigure.mahalanobis_threshold;
+  thresholds.occupied_threshold = reconfigure.occupied_threshold;
+  try
+  {
+    filter_->setClassification(thresholds);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    NODELET_ERROR("dynamic_grid: reconfiguration refused: %s", e.what());
+  }
+}
+
+void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg,
+                                     tf2_ros::FilterFailureReason reason)
+{
+  {
+    std::lock_guard<std::mutex> lock(filter_mutex_);
+    ++tf_drops_;
+  }
+  const char* why =
+      reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the cloud has an empty frame_id"
+      : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "the cloud is older than the tf buffer"
+                                                              : "no transform within the queue";
+  NODELET_WARN_THROTTLE(kThrottleS,
+                        "dynamic_grid: dropping the scan of %s at t=%.3f: no tf %s <- '%s' at its stamp (%s)",
+                        sub_points_.getTopic().c_str(), cloud_msg->header.stamp.toSec(), fixed_frame_.c_str(),
+                        cloud_msg->header.frame_id.c_str(), why);
+}
+
+void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg)
+{
+  const auto start = std::chrono::steady_clock::now();
+  PointCloudView view;
+  const std::string field_error = pointCloudViewOf(*cloud_msg, view);
+  std::lock_guard<std::mutex> lock(filter_mutex_);
+  input_rate_->tick();
+  if (!field_error.empty())
+  {
+    if (!field_error_reported_)
+    {
+      NODELET_ERROR(
+          "dynamic_grid: cannot use the clouds of %s (frame '%s'): %s; they need float32 x, y, z "
+          "fields. Reported once; these clouds are dropped.",
+          sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), field_error.c_str());
+      field_error_reported_ = true;
+    }
+    return;
+  }
+  Eigen::Isometry3d world_from_sensor;
+  try
+  {
+    world_from_sensor = tf2::transformToEigen(
+        tf_buffer_->lookupTransform(fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp));
+  }
+  catch (const tf2::TransformException& e)
+  {
+    ++tf_drops_;
+    NODELET_WARN_THROTTLE(kThrottleS, "dynamic_grid: dropping the scan of %s: tf %s <- %s: %s",
+                          sub_points_.getTopic().c_str(), fixed_frame_.c_str(),
+                          cloud_msg->header.frame_id.c_str(), e.what());
+    return;
+  }
+  const DynamicGridCycle cycle = filter_->update(view, world_from_sensor, cloud_msg->header.stamp.toSec());
+  if (cycle.reset)
+  {
+    ++resets_;
+    NODELET_WARN("dynamic_grid: grid reset at t=%.3f (%s): %s", cloud_msg->header.stamp.toSec(),
+                 sub_points_.getTopic().c_str(), cycle.reset_reason.c_str());
+  }
+  if (cycle.sensor.invalid_points > 0)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "dynamic_grid: %zu of %zu points of %s dropped (NaN/Inf coordinates)",
+                          cycle.sensor.invalid_points, cycle.sensor.points, sub_points_.getTopic().c_str());
+  }
+  if (cycle.sensor.points == 0)
+  {
+    NODELET_DEBUG_THROTTLE(kThrottleS, "dynamic_grid: empty cloud on %s: prediction step only",
+                           sub_points_.getTopic().c_str());
+  }
+  invalid_points_ += cycle.sensor.invalid_points;
+  particles_in_use_ = cycle.particles_in_use;
+  ++scans_;
+
+  std_msgs::Header header;
+  header.stamp = cloud_msg->header.stamp;
+  header.frame_id = fixed_frame_;
+  if (pub_occupancy_.getNumSubscribers() > 0)
+  {
+    pub_occupancy_.publish(occupancyGridToMsg(*filter_, header));
+  }
+  if (pub_cells_.getNumSubscribers() > 0)
+  {
+    pub_cells_.publish(gridCellsToCloud(*filter_, header));
+  }
+  if (pub_grid_.getNumSubscribers() > 0)
+  {
+    pub_grid_.publish(dynamicGridToMsg(*filter_, header));
+  }
+  last_processing_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  max_processing_ms_ = std::max(max_processing_ms_, last_processing_ms_);
+}
+
+void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
+{
+  const double budget_ms = 1e3 / expected_rate_;
+  if (scans_ == 0)
+  {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "no scan processed yet");
+  }
+  else if (last_processing_ms_ > budget_ms)
+  {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "processing %.1f ms exceeds the scan period %.1f ms", last_processing_ms_, budget_ms);
+  }
+  else
+  {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
+  }
+  status.add("processing time last [ms]", last_processing_ms_);
+  status.add("processing time max [ms]", max_processing_ms_);
+  status.add("particles in use", particles_in_use_);
+  status.add("particles", filter_->config().particle_count);
+  status.add("scans processed", scans_);
+  status.add("points dropped (NaN/Inf)", invalid_points_);
+  status.add("scans dropped (tf)", tf_drops_);
+  status.add("grid resets", resets_);
+  status.add("fixed frame", fixed_frame_);
+}
+
+}  // namespace grid_vision_fusion
+
+PLUGINLIB_EXPORT_CLASS(grid_vision_fusion::DynamicGridNodelet, nodelet::Nodelet)
