@@ -4,7 +4,7 @@
 // and of the whole cycle [ms] (counters *_median_ms), for the default grid and particle count,
 // for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells. Not a test: run it by hand,
 //   devel/lib/grid_vision_fusion/bench_dynamic_grid
-// and record the figures in doc/benchmarks_dynamic_grid.md.
+// and record the figures in doc/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

@@ -11,20 +11,14 @@ add_library(gvf_box_world_lidar STATIC test/core/box_world_lidar.cpp)
 target_include_directories(gvf_box_world_lidar SYSTEM PUBLIC ${EIGEN3_INCLUDE_DIRS})
 target_compile_options(gvf_box_world_lidar PRIVATE ${GVF_WARNINGS})
 
-find_package(benchmark QUIET)
 if(benchmark_FOUND)
   add_executable(bench_dynamic_grid bench/bench_dynamic_grid.cpp)
   target_include_directories(bench_dynamic_grid PRIVATE test/core)
   target_link_libraries(bench_dynamic_grid grid_vision_fusion_core gvf_box_world_lidar benchmark::benchmark)
   target_compile_options(bench_dynamic_grid PRIVATE ${GVF_WARNINGS})
-else()
-  message(WARNING "Google Benchmark (libbenchmark-dev) not found: bench_dynamic_grid is not built")
 endif()
 
 if(CATKIN_ENABLE_TESTING)
-  find_package(rostest REQUIRED)
-  find_package(roslaunch REQUIRED)
-
   catkin_add_gtest(test_grid_core
     test/core/test_grid_map.cpp
     test/core/test_grid_sensor_model.cpp

@@ -8,20 +8,13 @@ target_sources(grid_vision_fusion_ros PRIVATE src/ros/projection_conversions.cpp
 target_sources(grid_vision_fusion_nodelets PRIVATE src/nodelets/grid_projection_nodelet.cpp)
 
 # Benchmark (Google Benchmark): built by default, never run as a test.
-find_package(benchmark QUIET)
 if(benchmark_FOUND)
   add_executable(bench_grid_projection bench/bench_grid_projection.cpp)
   target_link_libraries(bench_grid_projection grid_vision_fusion_core benchmark::benchmark)
   target_compile_options(bench_grid_projection PRIVATE ${GVF_WARNINGS})
-else()
-  message(WARNING "Google Benchmark (libbenchmark-dev) not found: bench_grid_projection is not built")
 endif()
 
 if(CATKIN_ENABLE_TESTING)
-  # The main CMakeLists.txt finds these after the fragments are included.
-  find_package(rostest REQUIRED)
-  find_package(roslaunch REQUIRED)
-
   catkin_add_gtest(test_grid_projection
     test/core/test_grid_projection.cpp
     test/core/test_kitti_calibration.cpp)

@@ -9,23 +9,17 @@ target_sources(grid_vision_fusion_nodelets PRIVATE src/nodelets/yolo_detector_no
 
 # Benchmark: the real YOLOv3 / YOLOv3-tiny architectures with random weights (built, not run
 # as a test). Google Benchmark from Debian's libbenchmark-dev.
-find_package(benchmark QUIET)
 if(benchmark_FOUND)
   add_executable(bench_yolo bench/bench_yolo.cpp)
   target_link_libraries(bench_yolo grid_vision_fusion_core benchmark::benchmark)
   target_compile_options(bench_yolo PRIVATE ${GVF_WARNINGS})
   target_compile_definitions(bench_yolo PRIVATE
-    GVF_YOLO_CFG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data/yolo")
+    GVF_YOLO_CFG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/models/yolo")
   set_target_properties(bench_yolo PROPERTIES
     RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION})
-else()
-  message(WARNING "Google Benchmark not found (Debian: libbenchmark-dev): bench_yolo is not built")
 endif()
 
 if(CATKIN_ENABLE_TESTING)
-  find_package(rostest REQUIRED)
-  find_package(roslaunch REQUIRED)
-
   # The tiny Darknet model writer, shared by the core tests and the rostest.
   add_library(gvf_tiny_darknet STATIC EXCLUDE_FROM_ALL test/core/tiny_darknet.cpp)
   target_compile_options(gvf_tiny_darknet PRIVATE ${GVF_WARNINGS})
@@ -37,7 +31,8 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_yolo_detection_replay.cpp)
   target_link_libraries(test_yolo_core grid_vision_fusion_core gvf_tiny_darknet ${GTEST_MAIN_LIBRARIES})
   target_compile_options(test_yolo_core PRIVATE ${GVF_WARNINGS})
-  target_compile_definitions(test_yolo_core PRIVATE GVF_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data")
+  target_compile_definitions(test_yolo_core PRIVATE GVF_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data"
+    GVF_MODEL_DIR="${CMAKE_CURRENT_SOURCE_DIR}/models/yolo")
 
   add_rostest_gtest(test_yolo_detector_nodelet test/rostest/yolo_detector_nodelet.test
     test/rostest/test_yolo_detector_nodelet.cpp)

@@ -20,7 +20,7 @@ using test::sigmoid;
 using test::TinyDarknetFiles;
 using test::TinyDarknetSpec;
 
-const std::string kDataDir = GVF_TEST_DATA_DIR;
+const std::string kModelDir = GVF_MODEL_DIR;
 constexpr double kPixelTolerance = 1e-3;
 constexpr double kScoreTolerance = 1e-4;
 
@@ -408,17 +408,17 @@ TEST(DarknetCfgTest, ParameterCountsOfTheRealArchitectures)
 {
   // The official yolov3.weights is 248 007 048 bytes = 20 + 4 · 62 001 757, yolov3-tiny.weights
   // 35 434 956 bytes = 20 + 4 · 8 858 734.
-  const DarknetCfgInfo yolov3 = parseDarknetCfg(kDataDir + "/yolo/yolov3.cfg");
+  const DarknetCfgInfo yolov3 = parseDarknetCfg(kModelDir + "/yolov3.cfg");
   EXPECT_EQ(yolov3.parameters, 62001757U);
   EXPECT_EQ(yolov3.num_classes, 80);
   EXPECT_EQ(yolov3.yolo_layers, 3);
   EXPECT_EQ(yolov3.input_width, 608);
   EXPECT_EQ(yolov3.input_height, 608);
-  const DarknetCfgInfo tiny = parseDarknetCfg(kDataDir + "/yolo/yolov3-tiny.cfg");
+  const DarknetCfgInfo tiny = parseDarknetCfg(kModelDir + "/yolov3-tiny.cfg");
   EXPECT_EQ(tiny.parameters, 8858734U);
   EXPECT_EQ(tiny.yolo_layers, 2);
   EXPECT_EQ(tiny.input_width, 416);
-  EXPECT_EQ(readClassNames(kDataDir + "/yolo/coco.names").size(), 80U);
+  EXPECT_EQ(readClassNames(kModelDir + "/coco.names").size(), 80U);
 }
 
 TEST(DarknetCfgTest, Yolov4TinyStyleGroupedRouteIsCounted)
