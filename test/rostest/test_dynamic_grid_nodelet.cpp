@@ -16,28 +16,15 @@
 #include <set>
 
 #include "grid_vision_fusion/DynamicGrid.h"
+#include "wait_for.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
+using test::waitFor;
 constexpr char kLidarFrame[] = "velodyne";
 
-bool waitFor(const std::function<bool()>& condition, double timeout_s)
-{
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (ros::ok() && ros::WallTime::now() < deadline)
-  {
-    ros::spinOnce();
-    if (condition())
-    {
-      return true;
-    }
-    ros::WallDuration(0.01).sleep();
-  }
-  ros::spinOnce();
-  return condition();
-}
 
 constexpr double kWallX = 11.05;  // world x of a static wall, 6 m wide
 

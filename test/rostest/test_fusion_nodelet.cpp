@@ -14,29 +14,16 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
+#include "wait_for.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
+using test::waitFor;
 constexpr std::uint32_t kWidth = 640;
 constexpr std::uint32_t kHeight = 480;
 
-bool waitFor(const std::function<bool()>& condition, double timeout_s)
-{
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (ros::ok() && ros::WallTime::now() < deadline)
-  {
-    ros::spinOnce();
-    if (condition())
-    {
-      return true;
-    }
-    ros::WallDuration(0.01).sleep();
-  }
-  ros::spinOnce();
-  return condition();
-}
 
 Detection2D makeBox(std::uint32_t class_id, const std::string& label, float score, float x_min, float y_min,
                     float x_max, float y_max)
@@ -74,20 +61,7 @@ protected:
     pub_detections_ = nh_.advertise<Detection2DArray>("detections", 10);
     pub_grid_ = nh_.advertise<ProjectedGrid>("projected_grid", 10);
     pub_image_ = nh_.advertise<sensor_msgs::Image>("image", 10);
-    ASSERT_TRUE(waitFor(
-        [] {
-          ros::master::V_TopicInfo topics;
-          ros::master::getTopics(topics);
-          for (const auto& t : topics)
-          {
-            if (t.name == "/objects")
-            {
-              return true;
-            }
-          }
-          return false;
-        },
-        20.0))
+    ASSERT_TRUE(waitFor([] { return test::topicAdvertised("/objects"); }, 20.0))
         << "the fusion nodelet never advertised /objects";
   }
 

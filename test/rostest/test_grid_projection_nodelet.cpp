@@ -16,11 +16,13 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
+#include "wait_for.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
+using test::waitFor;
 constexpr std::uint32_t kWidth = 640;
 constexpr std::uint32_t kHeight = 480;
 constexpr double kFocal = 500.0;
@@ -29,28 +31,6 @@ constexpr double kCy = 240.0;
 constexpr double kCameraHeight = 1.5;  // camera_optical is 1.5 m above the grid origin, looking along +x
 constexpr double kPixelTolerance = 0.01;
 
-bool waitFor(const std::function<bool()>& condition, double timeout_s,
-             const std::function<void()>& every_100ms = nullptr)
-{
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  ros::WallTime next_action = ros::WallTime::now();
-  while (ros::ok() && ros::WallTime::now() < deadline)
-  {
-    if (every_100ms && ros::WallTime::now() >= next_action)
-    {
-      every_100ms();
-      next_action = ros::WallTime::now() + ros::WallDuration(0.1);
-    }
-    ros::spinOnce();
-    if (condition())
-    {
-      return true;
-    }
-    ros::WallDuration(0.01).sleep();
-  }
-  ros::spinOnce();
-  return condition();
-}
 
 /// Expected pixel of world ground point (x, y, 0) for the test camera: optical x = −y,
 /// optical y = 1.5 m − z, optical z = x.
@@ -67,20 +47,7 @@ protected:
     pub_grid_ = nh_.advertise<DynamicGrid>("grid", 10);
     pub_info_ = nh_.advertise<sensor_msgs::CameraInfo>("camera_info", 10);
     pub_image_ = nh_.advertise<sensor_msgs::Image>("image", 10);
-    ASSERT_TRUE(waitFor(
-        [] {
-          ros::master::V_TopicInfo topics;
-          ros::master::getTopics(topics);
-          for (const auto& t : topics)
-          {
-            if (t.name == "/projected_grid")
-            {
-              return true;
-            }
-          }
-          return false;
-        },
-        20.0))
+    ASSERT_TRUE(waitFor([] { return test::topicAdvertised("/projected_grid"); }, 20.0))
         << "the grid_projection nodelet never advertised /projected_grid";
   }
 

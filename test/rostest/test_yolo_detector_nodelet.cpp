@@ -16,28 +16,15 @@
 
 #include "../core/tiny_darknet.h"
 #include "grid_vision_fusion/Detection2DArray.h"
+#include "wait_for.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
+using test::waitFor;
 std::string g_model_dir;
 
-bool waitFor(const std::function<bool()>& condition, double timeout_s)
-{
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (ros::ok() && ros::WallTime::now() < deadline)
-  {
-    ros::spinOnce();
-    if (condition())
-    {
-      return true;
-    }
-    ros::WallDuration(0.01).sleep();
-  }
-  ros::spinOnce();
-  return condition();
-}
 
 bool loadNodelet(const std::string& name, const std::string& prefix)
 {

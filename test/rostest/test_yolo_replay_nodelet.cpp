@@ -10,26 +10,13 @@
 #include <functional>
 
 #include "grid_vision_fusion/Detection2DArray.h"
+#include "wait_for.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
-bool waitFor(const std::function<bool()>& condition, double timeout_s)
-{
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (ros::ok() && ros::WallTime::now() < deadline)
-  {
-    ros::spinOnce();
-    if (condition())
-    {
-      return true;
-    }
-    ros::WallDuration(0.01).sleep();
-  }
-  ros::spinOnce();
-  return condition();
-}
+using test::waitFor;
 
 void expectBox(const Detection2D& d, const std::string& label, float x_min, float y_min, float x_max, float y_max)
 {
