@@ -133,18 +133,29 @@ std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudVi
   return std::string();
 }
 
+namespace
+{
+/// The map metadata of the grid: resolution, size and the corner of cell (0, 0), axes aligned.
+nav_msgs::MapMetaData mapMetaData(const GridGeometry& g, const ros::Time& stamp)
+{
+  nav_msgs::MapMetaData info;
+  info.map_load_time = stamp;
+  info.resolution = static_cast<float>(g.resolution);
+  info.width = static_cast<std::uint32_t>(g.width);
+  info.height = static_cast<std::uint32_t>(g.height);
+  info.origin.position.x = g.originX();
+  info.origin.position.y = g.originY();
+  info.origin.orientation.w = 1.0;
+  return info;
+}
+}  // namespace
+
 DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msgs::Header& header)
 {
   auto msg = boost::make_shared<DynamicGrid>();
   msg->header = header;
   const GridGeometry& g = filter.geometry();
-  msg->info.map_load_time = header.stamp;
-  msg->info.resolution = static_cast<float>(g.resolution);
-  msg->info.width = static_cast<std::uint32_t>(g.width);
-  msg->info.height = static_cast<std::uint32_t>(g.height);
-  msg->info.origin.position.x = g.originX();
-  msg->info.origin.position.y = g.originY();
-  msg->info.origin.orientation.w = 1.0;
+  msg->info = mapMetaData(g, header.stamp);
   const CellStates& s = filter.cells();
   msg->p_static = s.p_static;
   msg->p_dynamic = s.p_dynamic;
@@ -163,13 +174,7 @@ nav_msgs::OccupancyGrid::Ptr occupancyGridToMsg(const DynamicGridFilter& filter,
   auto msg = boost::make_shared<nav_msgs::OccupancyGrid>();
   msg->header = header;
   const GridGeometry& g = filter.geometry();
-  msg->info.map_load_time = header.stamp;
-  msg->info.resolution = static_cast<float>(g.resolution);
-  msg->info.width = static_cast<std::uint32_t>(g.width);
-  msg->info.height = static_cast<std::uint32_t>(g.height);
-  msg->info.origin.position.x = g.originX();
-  msg->info.origin.position.y = g.originY();
-  msg->info.origin.orientation.w = 1.0;
+  msg->info = mapMetaData(g, header.stamp);
   const CellStates& s = filter.cells();
   msg->data.resize(g.cellCount());
   for (std::size_t i = 0; i < g.cellCount(); ++i)
