@@ -2,7 +2,7 @@
 //
 //   rosrun grid_vision_fusion make_synthetic_drive --output ~/kitti_synthetic
 //       [--scenario config/synthetic_drive.yaml] [--calibration data/calibration/2011_09_26]
-//       [--drive 9001] [--frames N] [--seed S]
+//       [--drive 9001] [--frames N] [--seed S] [--from-drive RECORDED_DRIVE_DIR]
 #include <ros/package.h>
 
 #include <cstdlib>
@@ -32,6 +32,9 @@ const char* const kUsage =
     "  --drive N           drive number, 0..9999 (default 9001)\n"
     "  --frames N          write only the first N frames (default: the whole scenario)\n"
     "  --seed S            override the scenario's random seed (lidar noise, dropouts)\n"
+    "  --from-drive DIR    replay a recorded KITTI raw drive instead: the ego follows its\n"
+    "                      oxts/, the actors its tracklet_labels.xml (road, scenery and lidar\n"
+    "                      settings from --scenario when given, else an empty flat world)\n"
     "  -h, --help          this text\n";
 
 int fail(const std::string& message)
@@ -63,6 +66,7 @@ int main(int argc, char** argv)
   using namespace grid_vision_fusion;
   SyntheticDriveOptions options;
   std::string scenario_path;
+  std::string recorded_drive;
   int seed = -1;
   try
   {
@@ -107,6 +111,10 @@ int main(int argc, char** argv)
       {
         seed = parseInt(arg, value);
       }
+      else if (arg == "--from-drive")
+      {
+        recorded_drive = value;
+      }
       else
       {
         return fail("unknown option " + arg + "\n\n" + kUsage);
@@ -116,6 +124,7 @@ int main(int argc, char** argv)
     {
       return fail(std::string("--output is required\n\n") + kUsage);
     }
+    const bool explicit_scenario = !scenario_path.empty();
     if (scenario_path.empty() || options.calibration_dir.empty())
     {
       const std::string package = ros::package::getPath("grid_vision_fusion");
@@ -134,7 +143,17 @@ int main(int argc, char** argv)
       }
     }
 
-    SyntheticScenario scenario = loadScenario(scenario_path);
+    SyntheticScenario scenario;
+    if (recorded_drive.empty())
+    {
+      scenario = loadScenario(scenario_path);
+    }
+    else
+    {
+      const SyntheticScenario base = explicit_scenario ? loadScenario(scenario_path) : SyntheticScenario{};
+      scenario = recordedDriveScenario(recorded_drive, KittiRawCalibration::readDirectory(options.calibration_dir), base);
+      scenario_path = recorded_drive;
+    }
     if (seed >= 0)
     {
       scenario.seed = static_cast<std::uint32_t>(seed);

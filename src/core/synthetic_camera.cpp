@@ -139,7 +139,10 @@ RenderedImage renderCamera(const SceneSnapshot& scene, const std::vector<std::ui
   out.actors.resize(actor_count);
   for (std::size_t i = 0; i < actor_count; ++i)
   {
-    out.actors[i] = projectBox(scene.actorBoxes()[i], world_from_projection, camera);
+    if (scene.actorActive(i))
+    {
+      out.actors[i] = projectBox(scene.actorBoxes()[i], world_from_projection, camera);
+    }
   }
 
   const Eigen::Matrix3d m_inverse = camera.projection.leftCols<3>().inverse();

@@ -162,8 +162,14 @@ struct TrackletSample
   int truncation = 0;
 };
 
-void writeTracklets(const fs::path& path, const std::vector<Actor>& actors,
-                    const std::vector<std::vector<TrackletSample>>& samples)
+/// The frames of one actor's tracklet: contiguous from first_frame.
+struct TrackletTrack
+{
+  int first_frame = -1;
+  std::vector<TrackletSample> samples;
+};
+
+void writeTracklets(const fs::path& path, const std::vector<Actor>& actors, const std::vector<TrackletTrack>& tracks)
 {
   std::ofstream out = openForWriting(path);
   out << std::setprecision(10);
@@ -175,12 +181,13 @@ void writeTracklets(const fs::path& path, const std::vector<Actor>& actors,
   {
     out << (a == 0 ? "\t<item class_id=\"1\" tracking_level=\"0\" version=\"1\">\n" : "\t<item>\n");
     out << "\t\t<objectType>" << actors[a].type << "</objectType>\n\t\t<h>" << actors[a].height << "</h>\n\t\t<w>"
-        << actors[a].width << "</w>\n\t\t<l>" << actors[a].length << "</l>\n\t\t<first_frame>0</first_frame>\n";
-    out << "\t\t<poses class_id=\"2\" tracking_level=\"0\" version=\"0\">\n\t\t\t<count>" << samples[a].size()
+        << actors[a].width << "</w>\n\t\t<l>" << actors[a].length << "</l>\n\t\t<first_frame>"
+        << std::max(tracks[a].first_frame, 0) << "</first_frame>\n";
+    out << "\t\t<poses class_id=\"2\" tracking_level=\"0\" version=\"0\">\n\t\t\t<count>" << tracks[a].samples.size()
         << "</count>\n\t\t\t<item_version>2</item_version>\n";
-    for (std::size_t f = 0; f < samples[a].size(); ++f)
+    for (std::size_t f = 0; f < tracks[a].samples.size(); ++f)
     {
-      const TrackletSample& s = samples[a][f];
+      const TrackletSample& s = tracks[a].samples[f];
       out << (a == 0 && f == 0 ? "\t\t\t<item class_id=\"3\" tracking_level=\"0\" version=\"2\">\n" : "\t\t\t<item>\n")
           << "\t\t\t\t<tx>" << s.bottom_centre_velo.x() << "</tx>\n\t\t\t\t<ty>" << s.bottom_centre_velo.y()
           << "</ty>\n\t\t\t\t<tz>" << s.bottom_centre_velo.z() << "</tz>\n\t\t\t\t<rx>0</rx>\n\t\t\t\t<ry>0</ry>\n"
@@ -250,6 +257,68 @@ std::string oxtsDataFormat()
          "posmode:       position mode of primary GPS receiver (see gps_mode_to_string)\n"
          "velmode:       velocity mode of primary GPS receiver (see gps_mode_to_string)\n"
          "orimode:       orientation mode of primary GPS receiver (see gps_mode_to_string)\n";
+}
+
+SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const KittiRawCalibration& calibration,
+                                        const SyntheticScenario& base)
+{
+  static const std::uint32_t kPalette[] = {0xB03A2E, 0x1F618D, 0x239B56, 0x884EA0, 0xCA6F1E,
+                                           0x5D6D7E, 0xD0D3D4, 0x7D6608, 0x2874A6, 0xA04000};
+  const std::vector<OxtsRecord> records = readOxtsFolder((fs::path(drive_dir) / "oxts").string());
+  const std::vector<Eigen::Isometry3d> imu_poses = oxtsPosesRelativeToFirst(records);
+  const std::vector<Tracklet> tracklets = readTracklets((fs::path(drive_dir) / "tracklet_labels.xml").string());
+  SyntheticScenario scenario = base;
+  const double rate = base.frame_rate_hz;
+  scenario.duration_s = static_cast<double>(imu_poses.size()) / rate;
+
+  std::vector<double> times;
+  std::vector<Pose2D> ego;
+  for (std::size_t i = 0; i < imu_poses.size(); ++i)
+  {
+    const Eigen::Isometry3d& p = imu_poses[i];
+    times.push_back(static_cast<double>(i) / rate);
+    ego.push_back({p.translation().x(), p.translation().y(), std::atan2(p.linear()(1, 0), p.linear()(0, 0))});
+  }
+  scenario.ego = Trajectory::posed(times, ego);
+
+  const Eigen::Isometry3d imu_from_velo = calibration.velo_from_imu.inverse();
+  scenario.actors.clear();
+  for (std::size_t k = 0; k < tracklets.size(); ++k)
+  {
+    const Tracklet& tracklet = tracklets[k];
+    std::vector<double> actor_times;
+    std::vector<Pose2D> actor_poses;
+    for (std::size_t j = 0; j < tracklet.poses.size(); ++j)
+    {
+      const std::size_t frame = static_cast<std::size_t>(tracklet.first_frame) + j;
+      if (frame >= ego.size())
+      {
+        throw std::runtime_error(drive_dir + "/tracklet_labels.xml: tracklet " + std::to_string(k) + " has a pose in frame " +
+                                 std::to_string(frame) + " but oxts/ has only " + std::to_string(ego.size()) + " records");
+      }
+      const TrackletPose& pose = tracklet.poses[j];
+      const Eigen::Isometry3d world_from_imu = groundPose(ego[frame], 0.0);
+      const Eigen::Vector3d world = world_from_imu * (imu_from_velo * Eigen::Vector3d(pose.tx, pose.ty, pose.tz));
+      actor_times.push_back(times[frame]);
+      actor_poses.push_back({world.x(), world.y(), ego[frame].yaw + pose.rz});
+    }
+    if (actor_poses.empty())
+    {
+      continue;
+    }
+    Actor actor;
+    actor.type = tracklet.object_type;
+    actor.length = tracklet.l;
+    actor.width = tracklet.w;
+    actor.height = tracklet.h;
+    actor.trajectory = Trajectory::posed(actor_times, actor_poses);
+    actor.active_from = actor_times.front();
+    actor.active_until = actor_times.back();
+    actor.color_rgb = kPalette[k % (sizeof(kPalette) / sizeof(kPalette[0]))];
+    scenario.actors.push_back(actor);
+  }
+  scenario.validate();
+  return scenario;
 }
 
 SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
@@ -329,7 +398,7 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
   SyntheticDriveSummary summary;
   summary.drive_dir = drive_dir.string();
   summary.frames = frames;
-  std::vector<std::vector<TrackletSample>> tracklets(scenario.actors.size());
+  std::vector<TrackletTrack> tracklets(scenario.actors.size());
   for (int frame = 0; frame < frames; ++frame)
   {
     const double t = scenario.frameTime(frame);
@@ -369,6 +438,10 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
         labels << labelLine(scenario.actors[a], box, seen, rect_from_world);
         ++summary.labels;
       }
+      if (!scene.actorActive(a))
+      {
+        continue;
+      }
       TrackletSample sample;
       sample.bottom_centre_velo = velo_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
       const Eigen::Vector3d heading = velo_from_world.linear() *
@@ -376,7 +449,11 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
       sample.yaw_velo = std::atan2(heading.y(), heading.x());
       sample.occlusion = std::min(seen.occlusionLevel(), 2);
       sample.truncation = !seen.in_view ? 2 : seen.truncation > 0.05 ? 1 : 0;
-      tracklets[a].push_back(sample);
+      if (tracklets[a].first_frame < 0)
+      {
+        tracklets[a].first_frame = frame;
+      }
+      tracklets[a].samples.push_back(sample);
     }
     closeChecked(labels, label_path);
 

@@ -97,6 +97,27 @@ Trajectory Trajectory::constantTurn(const Pose2D& start, double speed, double ya
   return trajectory;
 }
 
+Trajectory Trajectory::posed(const std::vector<double>& times, const std::vector<Pose2D>& poses)
+{
+  if (times.size() != poses.size())
+  {
+    throw std::invalid_argument("posed trajectory: " + std::to_string(times.size()) + " times for " +
+                                std::to_string(poses.size()) + " poses");
+  }
+  std::vector<Eigen::Vector3d> t_x_y;
+  for (std::size_t i = 0; i < poses.size(); ++i)
+  {
+    t_x_y.emplace_back(times[i], poses[i].x, poses[i].y);
+  }
+  Trajectory trajectory = waypoints(t_x_y, poses.empty() ? 0.0 : poses.front().yaw);
+  for (const Pose2D& pose : poses)
+  {
+    trajectory.waypoint_yaw_.push_back(pose.yaw);
+  }
+  trajectory.start_.yaw = poses.front().yaw;
+  return trajectory;
+}
+
 Trajectory Trajectory::parked(const Pose2D& pose) { return waypoints({Eigen::Vector3d(0.0, pose.x, pose.y)}, pose.yaw); }
 
 Pose2D Trajectory::poseAt(double t) const
@@ -125,13 +146,18 @@ Pose2D Trajectory::poseAt(double t) const
   }
   if (t >= w.back().x())
   {
-    return {w.back().y(), w.back().z(), segment_yaw_.back()};
+    return {w.back().y(), w.back().z(), waypoint_yaw_.empty() ? segment_yaw_.back() : waypoint_yaw_.back()};
   }
   const auto next = std::upper_bound(w.begin(), w.end(), t, [](double time, const Eigen::Vector3d& p) { return time < p.x(); });
   const std::size_t i = static_cast<std::size_t>(next - w.begin()) - 1;
   const double s = (t - w[i].x()) / (w[i + 1].x() - w[i].x());
   const Eigen::Vector2d p = (1.0 - s) * w[i].tail<2>() + s * w[i + 1].tail<2>();
-  return {p.x(), p.y(), segment_yaw_[i]};
+  if (waypoint_yaw_.empty())
+  {
+    return {p.x(), p.y(), segment_yaw_[i]};
+  }
+  const double turn = std::remainder(waypoint_yaw_[i + 1] - waypoint_yaw_[i], 2.0 * M_PI);
+  return {p.x(), p.y(), std::remainder(waypoint_yaw_[i] + s * turn, 2.0 * M_PI)};
 }
 
 Eigen::Vector2d Trajectory::velocityAt(double t) const
@@ -239,6 +265,7 @@ SceneSnapshot::SceneSnapshot(const std::vector<Actor>& actors, const std::vector
   for (const auto& actor : actors)
   {
     actor_boxes_.push_back(actor.boxAt(t));
+    actor_active_.push_back(actor.activeAt(t));
     bound_radius_.push_back(boundingSphere(actor_boxes_.back()).radius);
   }
   for (const auto& item : scenery)
@@ -265,6 +292,10 @@ RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   const std::size_t actors = actor_boxes_.size();
   for (std::size_t i = 0; i < actors + scenery_boxes_.size(); ++i)
   {
+    if (i < actors && !actor_active_[i])
+    {
+      continue;
+    }
     const GroundBox& box = i < actors ? actor_boxes_[i] : scenery_boxes_[i - actors];
     const double limit = std::min(max_range, best.range);
     if (!mayHit(boundingSphere(box).centre, bound_radius_[i], origin, direction, min_range, limit))
@@ -286,7 +317,7 @@ void SceneSnapshot::actorsAlong(const Eigen::Vector3d& origin, const Eigen::Vect
 {
   for (std::size_t i = 0; i < actor_boxes_.size(); ++i)
   {
-    if (mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range, max_range) &&
+    if (actor_active_[i] && mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range, max_range) &&
         intersectBox(actor_boxes_[i], origin, direction, min_range).range <= max_range)
     {
       actors.push_back(static_cast<int>(i));

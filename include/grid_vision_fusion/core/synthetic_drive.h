@@ -40,6 +40,15 @@ struct SyntheticDriveSummary
   std::size_t labels = 0;       ///< label_2 lines over all frames
 };
 
+/// A scenario that replays a recorded KITTI raw drive (its oxts/ and tracklet_labels.xml): the
+/// ego follows the OXTS poses relative to the first frame, flattened onto the ground plane (x, y,
+/// yaw); every tracklet becomes an actor of its type and size that follows its recorded poses
+/// while it is labelled and is absent otherwise. Frame i is at t = i / base.frame_rate_hz. Road,
+/// scenery, lidar settings, seed and frame rate come from `base`; the duration covers the
+/// recorded frames. @throws std::runtime_error naming the file at fault.
+SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const KittiRawCalibration& calibration,
+                                        const SyntheticScenario& base);
+
 /// The standard 30-line OXTS dataformat.txt of the KITTI raw data.
 std::string oxtsDataFormat();
 

@@ -37,6 +37,10 @@ public:
   static Trajectory constantTurn(const Pose2D& start, double speed, double yaw_rate);
   /// Standing still at `pose`.
   static Trajectory parked(const Pose2D& pose);
+  /// Piecewise-linear motion through full poses (position and yaw) at strictly increasing
+  /// `times` [s]; the yaw is interpolated along the shorter arc (e.g. recorded tracklets).
+  /// @throws std::invalid_argument when empty, sizes differ or times do not increase.
+  static Trajectory posed(const std::vector<double>& times, const std::vector<Pose2D>& poses);
 
   Pose2D poseAt(double t) const;
   /// Velocity over ground [m/s] in the world frame.
@@ -50,6 +54,7 @@ private:
   } kind_ = Kind::kWaypoints;
   std::vector<Eigen::Vector3d> waypoints_;
   std::vector<double> segment_yaw_;  ///< yaw held at the end of each segment
+  std::vector<double> waypoint_yaw_;  ///< explicit yaw per waypoint (posed()), else empty
   Pose2D start_;
   double speed_ = 0.0;
   double yaw_rate_ = 0.0;
@@ -74,8 +79,13 @@ struct Actor
   double length = 4.0, width = 1.8, height = 1.5;  ///< [m]
   Trajectory trajectory = Trajectory::parked({});
   std::uint32_t color_rgb = 0x2E5FA8;  ///< body colour for the camera, 0xRRGGBB
+  /// The actor exists only for active_from <= t <= active_until [s] (e.g. a recorded tracklet);
+  /// outside it neither the lidar nor the camera sees it.
+  double active_from = -std::numeric_limits<double>::infinity();
+  double active_until = std::numeric_limits<double>::infinity();
 
   GroundBox boxAt(double t) const;
+  bool activeAt(double t) const { return t >= active_from && t <= active_until; }
 };
 
 /// Static scenery: buildings, walls, parked trailers... (not labelled).
@@ -118,10 +128,13 @@ public:
                    double max_range, std::vector<int>& actors) const;
 
   const std::vector<GroundBox>& actorBoxes() const { return actor_boxes_; }
+  /// Whether actor i exists at the snapshot's time.
+  bool actorActive(std::size_t i) const { return actor_active_[i]; }
   const std::vector<GroundBox>& sceneryBoxes() const { return scenery_boxes_; }
 
 private:
   std::vector<GroundBox> actor_boxes_;
+  std::vector<bool> actor_active_;
   std::vector<GroundBox> scenery_boxes_;
   std::vector<double> bound_radius_;  ///< per box (actors then scenery), for a quick rejection
 };
