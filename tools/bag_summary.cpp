@@ -1,0 +1,192 @@
+// bag_summary: what a recorded run of the perception chain contains. Prints objects per frame
+// and the static/dynamic/unknown counts per class of a DetectedObjectArray topic, and exports the
+// overlay images (objects/image) as PNG frames and an MJPG video.
+//
+//   rosrun grid_vision_fusion bag_summary --bag objects.bag [--objects /objects]
+//       [--images /objects/image] [--frames-dir DIR] [--video FILE.avi]
+#include <cv_bridge/cv_bridge.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/core/fusion.h"
+#include "grid_vision_fusion/core/progress_bar.h"
+
+namespace
+{
+const char* const kUsage =
+    "usage: bag_summary --bag FILE [options]\n"
+    "\n"
+    "Summarises a bag recorded from the perception chain: objects per frame, static / dynamic /\n"
+    "unknown counts per class, mean speed of the dynamic objects; exports the overlay images.\n"
+    "\n"
+    "options:\n"
+    "  --bag FILE         the recorded bag (required)\n"
+    "  --objects TOPIC    DetectedObjectArray topic (default /objects)\n"
+    "  --images TOPIC     overlay image topic (default /objects/image)\n"
+    "  --frames-dir DIR   write every overlay image as DIR/NNNNNN.png\n"
+    "  --video FILE       write the overlay images as an MJPG .avi video at 10 fps\n"
+    "  -h, --help         this text\n";
+
+int fail(const std::string& message)
+{
+  std::cerr << "bag_summary: " << message << '\n';
+  return 1;
+}
+
+struct Counts
+{
+  std::size_t by_motion[3] = {0, 0, 0};
+  double dynamic_speed_sum = 0.0;
+};
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  using grid_vision_fusion::DetectedObject;
+  using grid_vision_fusion::DetectedObjectArray;
+  std::string bag_path, objects_topic = "/objects", images_topic = "/objects/image", frames_dir, video_path;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help")
+    {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (i + 1 >= argc)
+    {
+      return fail("option " + arg + " needs a value (or is unknown)\n\n" + kUsage);
+    }
+    const std::string value = argv[++i];
+    if (arg == "--bag")
+    {
+      bag_path = value;
+    }
+    else if (arg == "--objects")
+    {
+      objects_topic = value;
+    }
+    else if (arg == "--images")
+    {
+      images_topic = value;
+    }
+    else if (arg == "--frames-dir")
+    {
+      frames_dir = value;
+    }
+    else if (arg == "--video")
+    {
+      video_path = value;
+    }
+    else
+    {
+      return fail("unknown option " + arg + "\n\n" + kUsage);
+    }
+  }
+  if (bag_path.empty())
+  {
+    return fail(std::string("--bag is required\n\n") + kUsage);
+  }
+  try
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+    rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{objects_topic, images_topic}));
+    if (!frames_dir.empty())
+    {
+      std::filesystem::create_directories(frames_dir);
+    }
+    std::map<std::string, Counts> per_class;
+    std::map<std::size_t, std::size_t> frames_with_n_objects;
+    std::size_t frames = 0, images = 0;
+    cv::VideoWriter video;
+    grid_vision_fusion::ProgressBar bar("messages", view.size());
+    std::size_t done = 0;
+    for (const rosbag::MessageInstance& m : view)
+    {
+      bar.update(++done);
+      if (const auto objects = m.instantiate<DetectedObjectArray>())
+      {
+        ++frames;
+        ++frames_with_n_objects[objects->objects.size()];
+        for (const DetectedObject& o : objects->objects)
+        {
+          Counts& c = per_class[o.label];
+          ++c.by_motion[std::min<std::size_t>(o.motion, 2)];
+          if (o.motion == DetectedObject::MOTION_DYNAMIC)
+          {
+            c.dynamic_speed_sum += std::hypot(o.velocity.x, o.velocity.y);
+          }
+        }
+      }
+      else if (const auto image = m.instantiate<sensor_msgs::Image>())
+      {
+        if (frames_dir.empty() && video_path.empty())
+        {
+          continue;
+        }
+        const cv::Mat bgr = cv_bridge::toCvCopy(image, sensor_msgs::image_encodings::BGR8)->image;
+        if (!frames_dir.empty())
+        {
+          char name[32];
+          std::snprintf(name, sizeof(name), "%06zu.png", images);
+          const std::string path = (std::filesystem::path(frames_dir) / name).string();
+          if (!cv::imwrite(path, bgr))
+          {
+            return fail("cannot write " + path);
+          }
+        }
+        if (!video_path.empty())
+        {
+          if (!video.isOpened() &&
+              !video.open(video_path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, bgr.size()))
+          {
+            return fail("cannot open the video " + video_path + " for writing");
+          }
+          video.write(bgr);
+        }
+        ++images;
+      }
+    }
+    bar.finish();
+    if (frames == 0)
+    {
+      return fail("no " + objects_topic + " message in " + bag_path);
+    }
+    std::cout << "\n" << frames << " frames of " << objects_topic << ", " << images << " overlay images of "
+              << images_topic << "\n\nobjects per frame:\n";
+    for (const auto& [count, n] : frames_with_n_objects)
+    {
+      std::cout << "  " << count << " object(s): " << n << " frame(s)\n";
+    }
+    std::cout << "\nclass          static  dynamic  unknown  mean speed of dynamic [m/s]\n";
+    for (const auto& [label, c] : per_class)
+    {
+      char line[160];
+      std::snprintf(line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1], c.by_motion[2],
+                    c.by_motion[0],
+                    c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5).c_str() : "-");
+      std::cout << line;
+    }
+  }
+  catch (const rosbag::BagException& e)
+  {
+    return fail("cannot read " + bag_path + ": " + e.what());
+  }
+  catch (const std::exception& e)
+  {
+    return fail(e.what());
+  }
+  return 0;
+}
