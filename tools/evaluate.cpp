@@ -8,7 +8,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -91,6 +93,16 @@ double toNumber(const std::string& option, const std::string& text)
   throw UsageError(option + " expects a number, got '" + text + "'");
 }
 
+int toInteger(const std::string& option, const std::string& text)
+{
+  const double value = toNumber(option, text);
+  if (value != std::floor(value) || std::abs(value) > 1e6)
+  {
+    throw UsageError(option + " expects an integer, got '" + text + "'");
+  }
+  return static_cast<int>(value);
+}
+
 std::vector<std::string> splitComma(const std::string& text)
 {
   std::vector<std::string> parts;
@@ -109,67 +121,71 @@ Options parseArguments(int argc, char** argv)
 {
   Options o;
   std::vector<std::string> keep_only;
+  // Options with a value: name → what to do with it.
+  const std::map<std::string, std::function<void(const std::string&, const std::string&)>> with_value{
+      {"--drive", [&](const std::string&, const std::string& v) { o.drive = v; }},
+      {"--calibration", [&](const std::string&, const std::string& v) { o.calibration = v; }},
+      {"--labels", [&](const std::string&, const std::string& v) { o.labels = v; }},
+      {"--detections", [&](const std::string&, const std::string& v) { o.detections = v; }},
+      {"--output", [&](const std::string&, const std::string& v) { o.output = v; }},
+      {"--topic", [&](const std::string&, const std::string& v) { o.bag.topic = v; }},
+      {"--world-frame", [&](const std::string&, const std::string& v) { o.bag.world_frame = v; }},
+      {"--stamp-tolerance",
+       [&](const std::string& n, const std::string& v) { o.bag.stamp_tolerance_s = toNumber(n, v); }},
+      {"--max-range",
+       [&](const std::string& n, const std::string& v) { o.evaluation.max_longitudinal_m = toNumber(n, v); }},
+      {"--iou",
+       [&](const std::string& n, const std::string& v) { o.evaluation.iou_threshold = toNumber(n, v); }},
+      {"--dynamic-speed",
+       [&](const std::string& n, const std::string& v) { o.truth.dynamic_speed_mps = toNumber(n, v); }},
+      {"--max-truncation",
+       [&](const std::string& n, const std::string& v) { o.truth.max_truncation = toNumber(n, v); }},
+      {"--difficult-occlusion",
+       [&](const std::string& n, const std::string& v) { o.truth.difficult_occlusion = toInteger(n, v); }},
+      {"--classes", [&](const std::string&, const std::string& v) { keep_only = splitComma(v); }},
+      {"--map",
+       [&](const std::string&, const std::string& v)
+       {
+         for (const std::string& pair : splitComma(v))
+         {
+           const auto eq = pair.find('=');
+           if (eq == std::string::npos || eq == 0)
+           {
+             throw UsageError("--map expects from=to pairs, got '" + pair + "'");
+           }
+           o.truth.class_map[pair.substr(0, eq)] = pair.substr(eq + 1);
+         }
+       }},
+  };
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc)
-      {
-        throw UsageError(arg + " expects a value");
-      }
-      return argv[++i];
-    };
+    const auto option = with_value.find(arg);
     if (arg == "-h" || arg == "--help")
     {
       std::cout << kUsage;
       std::exit(0);
     }
-    else if (arg == "--drive")
-      o.drive = value();
-    else if (arg == "--calibration")
-      o.calibration = value();
-    else if (arg == "--labels")
-      o.labels = value();
-    else if (arg == "--detections")
-      o.detections = value();
-    else if (arg == "--output")
-      o.output = value();
-    else if (arg == "--topic")
-      o.bag.topic = value();
-    else if (arg == "--world-frame")
-      o.bag.world_frame = value();
-    else if (arg == "--stamp-tolerance")
-      o.bag.stamp_tolerance_s = toNumber(arg, value());
-    else if (arg == "--max-range")
-      o.evaluation.max_longitudinal_m = toNumber(arg, value());
-    else if (arg == "--iou")
-      o.evaluation.iou_threshold = toNumber(arg, value());
-    else if (arg == "--dynamic-speed")
-      o.truth.dynamic_speed_mps = toNumber(arg, value());
-    else if (arg == "--max-truncation")
-      o.truth.max_truncation = toNumber(arg, value());
-    else if (arg == "--difficult-occlusion")
-      o.truth.difficult_occlusion = static_cast<int>(toNumber(arg, value()));
-    else if (arg == "--classes")
-      keep_only = splitComma(value());
-    else if (arg == "--map")
-    {
-      for (const std::string& pair : splitComma(value()))
-      {
-        const auto eq = pair.find('=');
-        if (eq == std::string::npos || eq == 0)
-        {
-          throw UsageError("--map expects from=to pairs, got '" + pair + "'");
-        }
-        o.truth.class_map[pair.substr(0, eq)] = pair.substr(eq + 1);
-      }
-    }
     else if (arg == "--no-motion-classes")
+    {
       o.evaluation.motion_classes = false;
+    }
     else if (arg == "--all-frames")
+    {
       o.all_frames = true;
+    }
+    else if (option != with_value.end())
+    {
+      if (i + 1 >= argc)
+      {
+        throw UsageError(arg + " expects a value");
+      }
+      option->second(arg, argv[++i]);
+    }
     else
+    {
       throw UsageError("unknown argument '" + arg + "'");
+    }
   }
   if (o.drive.empty() || o.detections.empty() || o.output.empty())
   {
@@ -219,22 +235,24 @@ int run(const Options& o)
 
   std::size_t bar_total = 0;
   std::unique_ptr<gvf::ProgressBar> progress;
-  const gvf::DetectionBagResult bag = gvf::readDetectionBag(
-      o.detections, drive, o.bag, o.truth, [&](std::size_t done, std::size_t total) {
-        if (!progress || total != bar_total)
-        {
-          bar_total = total;
-          progress = std::make_unique<gvf::ProgressBar>(std::cerr, total, "detections", tty);
-        }
-        progress->update(done);
-      });
+  const gvf::DetectionBagResult bag = gvf::readDetectionBag(o.detections, drive, o.bag, o.truth,
+                                                            [&](std::size_t done, std::size_t total)
+                                                            {
+                                                              if (!progress || total != bar_total)
+                                                              {
+                                                                bar_total = total;
+                                                                progress = std::make_unique<gvf::ProgressBar>(
+                                                                    std::cerr, total, "detections", tty);
+                                                              }
+                                                              progress->update(done);
+                                                            });
   if (progress)
   {
     progress->finish();
   }
   const gvf::DetectionBagStats& s = bag.stats;
-  std::cerr << "Detections: " << bag.detections.size() << " objects in " << bag.frames.size() << " frames from "
-            << s.messages << " messages on " << o.bag.topic << "\n";
+  std::cerr << "Detections: " << bag.detections.size() << " objects in " << bag.frames.size()
+            << " frames from " << s.messages << " messages on " << o.bag.topic << "\n";
   if (s.unmatched > 0)
   {
     std::cerr << "warning: " << s.unmatched << " messages have no image time stamp within "
@@ -242,7 +260,8 @@ int run(const Options& o)
   }
   if (s.duplicates > 0)
   {
-    std::cerr << "warning: " << s.duplicates << " messages fall on a frame that already had one; the nearer in time is kept\n";
+    std::cerr << "warning: " << s.duplicates
+              << " messages fall on a frame that already had one; the nearer in time is kept\n";
   }
   if (s.other_frame > 0)
   {
@@ -251,14 +270,16 @@ int run(const Options& o)
   }
   if (s.invalid_objects > 0)
   {
-    std::cerr << "warning: " << s.invalid_objects << " objects with a non-finite or inverted box, score or position left out\n";
+    std::cerr << "warning: " << s.invalid_objects
+              << " objects with a non-finite or inverted box, score or position left out\n";
   }
   if (!o.all_frames)
   {
     const std::size_t before = truth.size();
-    truth.erase(std::remove_if(truth.begin(), truth.end(),
-                               [&](const gvf::GroundTruthObject& g) { return !bag.frames.count(g.frame_index); }),
-                truth.end());
+    truth.erase(
+        std::remove_if(truth.begin(), truth.end(),
+                       [&](const gvf::GroundTruthObject& g) { return !bag.frames.count(g.frame_index); }),
+        truth.end());
     if (truth.size() != before)
     {
       std::cerr << "Left out " << before - truth.size() << " ground-truth objects of the "
@@ -271,7 +292,8 @@ int run(const Options& o)
   const gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
   gvf::writeEvaluationOutputs(o.output, result, o.evaluation, ground_truth, bag.detections);
   std::cout << gvf::reportMarkdown(result, o.evaluation);
-  std::cerr << "Wrote " << o.output << "/metrics.json, report.md, ground-truth/, detection-results/ and the plots\n";
+  std::cerr << "Wrote " << o.output
+            << "/metrics.json, report.md, ground-truth/, detection-results/ and the plots\n";
   return 0;
 }
 }  // namespace

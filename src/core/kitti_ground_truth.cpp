@@ -80,7 +80,8 @@ void KittiGroundTruthConfig::validate() const
   }
   if (difficult_occlusion < 0 || difficult_occlusion > 3)
   {
-    throw std::invalid_argument("difficult_occlusion must be in 0..3, got " + std::to_string(difficult_occlusion));
+    throw std::invalid_argument("difficult_occlusion must be in 0..3, got " +
+                                std::to_string(difficult_occlusion));
   }
   if (difficult_truncation_flag < 1)
   {
@@ -89,7 +90,8 @@ void KittiGroundTruthConfig::validate() const
   }
   if (!(near_plane_m > 0.0) || !std::isfinite(near_plane_m))
   {
-    throw std::invalid_argument("near_plane_m must be a finite value > 0, got " + std::to_string(near_plane_m));
+    throw std::invalid_argument("near_plane_m must be a finite value > 0, got " +
+                                std::to_string(near_plane_m));
   }
 }
 
@@ -104,7 +106,8 @@ std::string KittiGroundTruthConfig::labelOf(const std::string& object_type) cons
   return keep_unmapped ? type : std::string();
 }
 
-KittiDrive KittiDrive::read(const std::string& drive_dir, const std::string& calibration_dir, bool with_tracklets)
+KittiDrive KittiDrive::read(const std::string& drive_dir, const std::string& calibration_dir,
+                            bool with_tracklets)
 {
   KittiDrive drive;
   const std::string stamps_path = drive_dir + "/image_02/timestamps.txt";
@@ -112,19 +115,21 @@ KittiDrive KittiDrive::read(const std::string& drive_dir, const std::string& cal
   const std::vector<OxtsRecord> oxts = readOxtsFolder(drive_dir + "/oxts");
   if (oxts.size() != drive.stamps.size())
   {
-    throw std::runtime_error(stamps_path + " has " + std::to_string(drive.stamps.size()) + " time stamps but " +
-                             drive_dir + "/oxts/data holds " + std::to_string(oxts.size()) +
-                             " records: not a synced drive");
+    throw std::runtime_error(stamps_path + " has " + std::to_string(drive.stamps.size()) +
+                             " time stamps but " + drive_dir + "/oxts/data holds " +
+                             std::to_string(oxts.size()) + " records: not a synced drive");
   }
   for (std::size_t i = 1; i < drive.stamps.size(); ++i)
   {
     if (!(drive.stamps[i].toSec() > drive.stamps[i - 1].toSec()))
     {
-      throw std::runtime_error(stamps_path + ":" + std::to_string(i + 1) + ": time stamp not after the previous one");
+      throw std::runtime_error(stamps_path + ":" + std::to_string(i + 1) +
+                               ": time stamp not after the previous one");
     }
   }
   drive.world_from_imu = oxtsPosesRelativeToFirst(oxts);
-  drive.calibration = KittiRawCalibration::readDirectory(calibration_dir.empty() ? parentOf(drive_dir) : calibration_dir);
+  drive.calibration =
+      KittiRawCalibration::readDirectory(calibration_dir.empty() ? parentOf(drive_dir) : calibration_dir);
   if (with_tracklets)
   {
     drive.tracklets = readTracklets(drive_dir + "/tracklet_labels.xml");
@@ -153,9 +158,9 @@ std::vector<double> KittiDrive::frameTimes() const
   return times;
 }
 
-bool projectVeloBox(const KittiRawCalibration& calibration, int camera, const Eigen::Vector3d& bottom_center_velo,
-                    double yaw, double length, double width, double height, double near_plane_m, BoundingBox& box,
-                    double& truncation)
+bool projectVeloBox(const KittiRawCalibration& calibration, int camera,
+                    const Eigen::Vector3d& bottom_center_velo, double yaw, double length, double width,
+                    double height, double near_plane_m, BoundingBox& box, double& truncation)
 {
   // projectBox() works on a box standing at z = 0 of its "world": here the velodyne frame moved
   // down to the box's bottom, so that velo = box frame + (0, 0, z_bottom).
@@ -177,8 +182,8 @@ bool projectVeloBox(const KittiRawCalibration& calibration, int camera, const Ei
   return in_image.in_view;
 }
 
-Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& times,
-                                   std::size_t j, int half_window)
+Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions,
+                                   const std::vector<double>& times, std::size_t j, int half_window)
 {
   if (positions.size() != times.size() || j >= positions.size() || half_window < 1)
   {
@@ -199,7 +204,8 @@ Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions
   return (positions[hi] - positions[lo]) / dt;
 }
 
-std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive, const KittiGroundTruthConfig& config)
+std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive,
+                                                   const KittiGroundTruthConfig& config)
 {
   config.validate();
   const std::vector<double> frame_times = drive.frameTimes();
@@ -215,9 +221,10 @@ std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive, cons
     const int last = tracklet.first_frame + static_cast<int>(tracklet.poses.size()) - 1;
     if (tracklet.first_frame < 0 || last >= drive.frameCount())
     {
-      throw std::runtime_error("tracklet " + std::to_string(k) + " (" + tracklet.object_type + ") spans frames " +
-                               std::to_string(tracklet.first_frame) + ".." + std::to_string(last) +
-                               " but the drive has " + std::to_string(drive.frameCount()) + " frames");
+      throw std::runtime_error("tracklet " + std::to_string(k) + " (" + tracklet.object_type +
+                               ") spans frames " + std::to_string(tracklet.first_frame) + ".." +
+                               std::to_string(last) + " but the drive has " +
+                               std::to_string(drive.frameCount()) + " frames");
     }
     // World trajectory of the box centre.
     std::vector<Eigen::Vector3d> world;
@@ -235,8 +242,9 @@ std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive, cons
       GroundTruthObject gt;
       gt.frame_index = tracklet.first_frame + static_cast<int>(j);
       gt.tracklet = static_cast<int>(k);
-      if (!projectVeloBox(drive.calibration, config.camera, Eigen::Vector3d(p.tx, p.ty, p.tz), p.rz, tracklet.l,
-                          tracklet.w, tracklet.h, config.near_plane_m, gt.object.box, gt.truncation))
+      if (!projectVeloBox(drive.calibration, config.camera, Eigen::Vector3d(p.tx, p.ty, p.tz), p.rz,
+                          tracklet.l, tracklet.w, tracklet.h, config.near_plane_m, gt.object.box,
+                          gt.truncation))
       {
         continue;
       }
@@ -267,9 +275,9 @@ std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive, cons
       out.push_back(std::move(gt));
     }
   }
-  std::stable_sort(out.begin(), out.end(), [](const GroundTruthObject& a, const GroundTruthObject& b) {
-    return a.frame_index < b.frame_index;
-  });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const GroundTruthObject& a, const GroundTruthObject& b)
+                   { return a.frame_index < b.frame_index; });
   return out;
 }
 
@@ -297,15 +305,16 @@ std::vector<MotionLabel> parseMotionLabels(std::istream& input, const std::strin
     }
     if (tokens.size() != 16 && tokens.size() != 17)
     {
-      throw KittiLabelError(source_name + ":" + std::to_string(line) +
-                            ": expected 15 KITTI fields, an optional score and a motion (static or dynamic), got " +
-                            std::to_string(tokens.size()) + " fields");
+      throw KittiLabelError(
+          source_name + ":" + std::to_string(line) +
+          ": expected 15 KITTI fields, an optional score and a motion (static or dynamic), got " +
+          std::to_string(tokens.size()) + " fields");
     }
     const Motion motion = parseMotion(tokens.back());
     if (motion == Motion::kUnknown)
     {
-      throw KittiLabelError(source_name + ":" + std::to_string(line) + ": last field must be static or dynamic, got '" +
-                            tokens.back() + "'");
+      throw KittiLabelError(source_name + ":" + std::to_string(line) +
+                            ": last field must be static or dynamic, got '" + tokens.back() + "'");
     }
     motions.push_back(motion);
     tokens.pop_back();
@@ -415,7 +424,8 @@ int nearestFrame(const std::vector<double>& frame_times, double t, double tolera
   const auto upper = std::lower_bound(frame_times.begin(), frame_times.end(), t);
   int best = -1;
   double best_gap = tolerance_s;
-  auto consider = [&](std::vector<double>::const_iterator it) {
+  auto consider = [&](std::vector<double>::const_iterator it)
+  {
     const double gap = std::abs(*it - t);
     if (gap <= best_gap)
     {

@@ -6,7 +6,7 @@
 namespace grid_vision_fusion
 {
 ProgressBar::ProgressBar(std::ostream& out, std::size_t total, std::string label, bool interactive, int width)
-  : out_(out), total_(total), label_(std::move(label)), interactive_(interactive), width_(width)
+    : out_(out), total_(total), label_(std::move(label)), interactive_(interactive), width_(width)
 {
   if (width_ < 1)
   {
@@ -43,7 +43,8 @@ void ProgressBar::update(std::size_t done)
   const int quarter = total_ == 0 ? 4 : static_cast<int>(done_ * 4 / total_);
   if (quarter != last_quarter_)
   {
-    out_ << label_ << ": " << done_ << "/" << total_ << " (" << (total_ == 0 ? 100 : done_ * 100 / total_) << " %)\n"
+    out_ << label_ << ": " << done_ << "/" << total_ << " (" << (total_ == 0 ? 100 : done_ * 100 / total_)
+         << " %)\n"
          << std::flush;
     last_quarter_ = quarter;
   }

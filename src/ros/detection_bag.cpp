@@ -13,9 +13,10 @@ namespace
 {
 bool finite(const DetectedObject& o)
 {
-  return std::isfinite(o.x_min) && std::isfinite(o.y_min) && std::isfinite(o.x_max) && std::isfinite(o.y_max) &&
-         std::isfinite(o.score) && std::isfinite(o.position.x) && std::isfinite(o.position.y) &&
-         std::isfinite(o.velocity.x) && std::isfinite(o.velocity.y) && o.x_max >= o.x_min && o.y_max >= o.y_min;
+  return std::isfinite(o.x_min) && std::isfinite(o.y_min) && std::isfinite(o.x_max) &&
+         std::isfinite(o.y_max) && std::isfinite(o.score) && std::isfinite(o.position.x) &&
+         std::isfinite(o.position.y) && std::isfinite(o.velocity.x) && std::isfinite(o.velocity.y) &&
+         o.x_max >= o.x_min && o.y_max >= o.y_min;
 }
 
 Motion toMotion(std::uint8_t motion)
@@ -93,8 +94,9 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
           topics += " " + c->topic + " ";
         }
       }
-      throw std::runtime_error(bag_path + ": no message on topic " + config.topic +
-                               (topics.empty() ? std::string(" (the bag is empty)") : " (topics:" + topics + ")"));
+      throw std::runtime_error(
+          bag_path + ": no message on topic " + config.topic +
+          (topics.empty() ? std::string(" (the bag is empty)") : " (topics:" + topics + ")"));
     }
     const std::vector<double> times = drive.frameTimes();
     struct Kept

@@ -110,17 +110,17 @@ TEST(KittiGroundTruth, ProjectsAPointTheWayTheDesignSays)
   // around that point projects to a box of about 1.5 px around it.
   BoundingBox box;
   double truncation = 1.0;
-  ASSERT_TRUE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(10.0, 0.0, -1.74), 0.0, 0.02, 0.02, 0.02, 0.1,
-                             box, truncation));
+  ASSERT_TRUE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(10.0, 0.0, -1.74), 0.0, 0.02, 0.02, 0.02,
+                             0.1, box, truncation));
   EXPECT_NEAR((box.x_min + box.x_max) / 2.0, 615.3, 0.3);
   EXPECT_NEAR((box.y_min + box.y_max) / 2.0, 303.5, 0.3);
   EXPECT_LT(box.x_max - box.x_min, 2.0);
   // Behind the camera: nothing.
-  EXPECT_FALSE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(-10.0, 0.0, -1.7), 0.0, 4.0, 1.8, 1.5, 0.1,
-                              box, truncation));
+  EXPECT_FALSE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(-10.0, 0.0, -1.7), 0.0, 4.0, 1.8, 1.5,
+                              0.1, box, truncation));
   // Far to the side (90° left at 2 m ahead): outside the image.
-  EXPECT_FALSE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(2.0, 30.0, -1.7), 0.0, 4.0, 1.8, 1.5, 0.1,
-                              box, truncation));
+  EXPECT_FALSE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(2.0, 30.0, -1.7), 0.0, 4.0, 1.8, 1.5,
+                              0.1, box, truncation));
 }
 
 TEST(KittiGroundTruth, BoxStraddlingTheCameraIsClippedAtTheNearPlane)
@@ -129,8 +129,8 @@ TEST(KittiGroundTruth, BoxStraddlingTheCameraIsClippedAtTheNearPlane)
   // box runs to the left image edge (clipped) and the truncation is large.
   BoundingBox box;
   double truncation = 0.0;
-  ASSERT_TRUE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(0.0, 3.0, -1.7), 0.0, 10.0, 1.8, 1.5, 0.1, box,
-                             truncation));
+  ASSERT_TRUE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(0.0, 3.0, -1.7), 0.0, 10.0, 1.8, 1.5,
+                             0.1, box, truncation));
   EXPECT_FLOAT_EQ(box.x_min, 0.F);
   EXPECT_GE(box.x_max, 0.F);
   EXPECT_LE(box.x_max, 1241.F);
@@ -286,7 +286,8 @@ TEST(KittiGroundTruth, TrackletBeyondTheDriveIsAnError)
 {
   KittiDrive d = drive();
   d.tracklets[0].first_frame = 100;  // 14 poses: frames 100..113 of a 108-frame drive
-  EXPECT_NE(errorOf([&] { trackletGroundTruth(d, KittiGroundTruthConfig{}); }).find("tracklet 0"), std::string::npos);
+  EXPECT_NE(errorOf([&] { trackletGroundTruth(d, KittiGroundTruthConfig{}); }).find("tracklet 0"),
+            std::string::npos);
 }
 
 TEST(KittiGroundTruth, MissingDriveFilesAreNamed)
@@ -307,9 +308,9 @@ TEST(TrajectoryVelocity, CentralInsideOneSidedAtTheEnds)
     p.emplace_back(i * i, 0.0, 0.0);
   }
   EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 2, 2).x(), 4.0);
-  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 0, 2).x(), 2.0);   // (4 − 0) / 2
-  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 5, 2).x(), 8.0);   // over 3..5: (25 − 9) / 2
-  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 1, 1).x(), 2.0);   // (4 − 0) / 2
+  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 0, 2).x(), 2.0);  // (4 − 0) / 2
+  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 5, 2).x(), 8.0);  // over 3..5: (25 − 9) / 2
+  EXPECT_DOUBLE_EQ(trajectoryVelocity(p, t, 1, 1).x(), 2.0);  // (4 − 0) / 2
   EXPECT_TRUE(trajectoryVelocity({p[0]}, {0.0}, 0, 2).isZero());
   EXPECT_THROW(trajectoryVelocity(p, std::vector<double>(6, 1.0), 2, 2), std::invalid_argument);
 }
@@ -345,7 +346,8 @@ TEST(MotionLabels, ParsesTheMotionColumnWithAndWithoutScore)
 
 TEST(MotionLabels, MalformedLinesNameFileAndLine)
 {
-  auto error = [](const std::string& text) {
+  auto error = [](const std::string& text)
+  {
     std::istringstream in(text);
     return errorOf([&] { parseMotionLabels(in, "labels/000007.txt"); });
   };
@@ -369,9 +371,10 @@ TEST(MotionLabels, FolderGroundTruth)
 {
   const std::string dir = tempDir("labels");
   // Frame 42: a car 20 m ahead (camera z = 20) dynamic, a heavily occluded van, a DontCare.
-  std::ofstream(dir + "/000042.txt") << "Car 0.00 0 0 100 150 200 220 1.5 1.6 3.9 0.0 1.65 20.0 0 dynamic\n"
-                                        "Van 0.00 2 0 300 150 400 230 2.0 1.8 4.5 2.0 1.65 25.0 0 static\n"
-                                        "DontCare -1 -1 -10 500 150 540 170 -1 -1 -1 -1000 -1000 -1000 -10 static\n";
+  std::ofstream(dir + "/000042.txt")
+      << "Car 0.00 0 0 100 150 200 220 1.5 1.6 3.9 0.0 1.65 20.0 0 dynamic\n"
+         "Van 0.00 2 0 300 150 400 230 2.0 1.8 4.5 2.0 1.65 25.0 0 static\n"
+         "DontCare -1 -1 -10 500 150 540 170 -1 -1 -1 -1000 -1000 -1000 -10 static\n";
   // Frame 7: truncated over the threshold, box partly outside the image (clipped).
   std::ofstream(dir + "/7.txt") << "Car 0.80 0 0 -20 150 80 250 1.5 1.6 3.9 -8.0 1.65 10.0 0 static\n";
   std::ofstream(dir + "/notes.txt") << "not a label file\n";
@@ -398,9 +401,10 @@ TEST(MotionLabels, FolderGroundTruth)
   EXPECT_NE(errorOf([&] { labelFolderGroundTruth(dir, drive().calibration, KittiGroundTruthConfig{}); })
                 .find("000043.txt:1:"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { labelFolderGroundTruth(dir + "/none", drive().calibration, KittiGroundTruthConfig{}); })
-                .find(dir + "/none"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([&] { labelFolderGroundTruth(dir + "/none", drive().calibration, KittiGroundTruthConfig{}); })
+          .find(dir + "/none"),
+      std::string::npos);
 }
 
 TEST(KittiFrameName, TenDigits)

@@ -37,8 +37,9 @@ TEST(ProgressBar, PlainOutputPrintsAtEveryQuarter)
     bar.update(i);
   }
   bar.finish();
-  EXPECT_EQ(out.str(), "frames: 0/8 (0 %)\nframes: 2/8 (25 %)\nframes: 4/8 (50 %)\nframes: 6/8 (75 %)\n"
-                       "frames: 8/8 (100 %)\n");
+  EXPECT_EQ(out.str(),
+            "frames: 0/8 (0 %)\nframes: 2/8 (25 %)\nframes: 4/8 (50 %)\nframes: 6/8 (75 %)\n"
+            "frames: 8/8 (100 %)\n");
 }
 
 TEST(ProgressBar, RejectsAZeroWidth)

@@ -22,7 +22,8 @@ namespace grid_vision_fusion
 {
 namespace
 {
-const std::string kDrive = std::string(GVF_TEST_DATA_DIR) + "/kitti_raw_2011_09_26/2011_09_26_drive_0001_sync";
+const std::string kDrive =
+    std::string(GVF_TEST_DATA_DIR) + "/kitti_raw_2011_09_26/2011_09_26_drive_0001_sync";
 constexpr int kFrames = 5;  // the bags cover frames 0..4
 
 const KittiDrive& drive()
@@ -70,7 +71,8 @@ DetectedObject objectFrom(const EvalObject& gt, float score)
 
 /// One message per frame 0..kFrames−1 with a perfect detection of every non-difficult ground
 /// truth object (stamped 3 ms after the image), plus `extra` objects per frame.
-std::map<int, DetectedObjectArray> perfectMessages(const std::map<int, std::vector<DetectedObject>>& extra = {})
+std::map<int, DetectedObjectArray> perfectMessages(
+    const std::map<int, std::vector<DetectedObject>>& extra = {})
 {
   std::map<int, DetectedObjectArray> messages;
   for (int f = 0; f < kFrames; ++f)
@@ -146,7 +148,8 @@ const ClassMetrics* classNamed(const EvaluationResult& result, const std::string
 TEST(DetectionBag, PerfectDetectionsGiveApOne)
 {
   const std::string bag = writeBag("perfect", perfectMessages());
-  const DetectionBagResult read = readDetectionBag(bag, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
+  const DetectionBagResult read =
+      readDetectionBag(bag, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
   EXPECT_EQ(read.stats.messages, static_cast<std::size_t>(kFrames));
   EXPECT_EQ(read.stats.unmatched, 0U);
   EXPECT_EQ(read.frames, (std::set<int>{0, 1, 2, 3, 4}));
@@ -166,7 +169,8 @@ TEST(DetectionBag, PerfectDetectionsGiveApOne)
   {
     if (!truth[i].difficult)
     {
-      EXPECT_NEAR(read.detections[d].longitudinal_m, truth[i].longitudinal_m, 0.05) << "frame " << truth[i].frame;
+      EXPECT_NEAR(read.detections[d].longitudinal_m, truth[i].longitudinal_m, 0.05)
+          << "frame " << truth[i].frame;
       ++d;
     }
   }
@@ -232,7 +236,8 @@ TEST(DetectionBag, ShiftedBoxIsAFalsePositive)
   shifted.x_min += dx;
   shifted.x_max += dx;
   const std::string bag = writeBag("shifted", perfectMessages({{0, {shifted}}}));
-  const DetectionBagResult read = readDetectionBag(bag, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
+  const DetectionBagResult read =
+      readDetectionBag(bag, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
   const EvaluationResult result = evaluate(evalObjects(truth), read.detections, EvaluationConfig{});
   const ClassMetrics* static_car = classNamed(result, "staticCar");
   ASSERT_NE(static_car, nullptr);
@@ -249,7 +254,8 @@ TEST(DetectionBag, ShiftedBoxIsAFalsePositive)
   const std::string first = writeBag("shifted_first", perfectMessages({{0, {shifted}}}));
   const DetectionBagResult read_first =
       readDetectionBag(first, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
-  const EvaluationResult result_first = evaluate(evalObjects(truth), read_first.detections, EvaluationConfig{});
+  const EvaluationResult result_first =
+      evaluate(evalObjects(truth), read_first.detections, EvaluationConfig{});
   EXPECT_NEAR(classNamed(result_first, "staticCar")->average_precision, n / (n + 1.0), 1e-12);
 }
 
@@ -281,7 +287,8 @@ TEST(DetectionBag, MatchesStampsWithinTheTolerance)
     other.data = "not objects";
     bag.write("/other", stampOf(0), other);
   }
-  const DetectionBagResult read = readDetectionBag(path, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
+  const DetectionBagResult read =
+      readDetectionBag(path, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
   EXPECT_EQ(read.stats.messages, 7U);
   EXPECT_EQ(read.stats.unmatched, 1U);
   EXPECT_EQ(read.stats.duplicates, 1U);
@@ -321,9 +328,12 @@ TEST(DetectionBag, InvalidObjectsAndDroppedClassesAreCounted)
 
 TEST(DetectionBag, ErrorsNameTheBag)
 {
-  EXPECT_NE(errorOf([] {
-              readDetectionBag("/nonexistent/run.bag", drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
-            }).find("/nonexistent/run.bag"),
+  EXPECT_NE(errorOf(
+                [] {
+                  readDetectionBag("/nonexistent/run.bag", drive(), DetectionBagConfig{},
+                                   KittiGroundTruthConfig{});
+                })
+                .find("/nonexistent/run.bag"),
             std::string::npos);
   const std::string bag = writeBag("topic", perfectMessages(), "/fusion/objects");
   const std::string no_topic =
@@ -337,9 +347,10 @@ TEST(DetectionBag, ErrorsNameTheBag)
     std_msgs::String s;
     out.write("/objects", stampOf(0), s);
   }
-  EXPECT_NE(errorOf([&] { readDetectionBag(wrong_type, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{}); })
-                .find("std_msgs/String"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([&] { readDetectionBag(wrong_type, drive(), DetectionBagConfig{}, KittiGroundTruthConfig{}); })
+          .find("std_msgs/String"),
+      std::string::npos);
 }
 
 TEST(EvaluateTool, WritesTheOutputsAndPrintsTheTables)
@@ -371,16 +382,40 @@ TEST(EvaluateTool, WritesTheOutputsAndPrintsTheTables)
             0);
   EXPECT_TRUE(std::filesystem::exists(all + "/ground-truth/0000000050.txt"));
 
+  // --labels: one label file for frame 0 with the first car (static, 25 m ahead). Within 30 m
+  // the bag holds 7 static cars (tracklet 0 in frames 0..4, tracklet 1 in frames 3, 4): 1 TP,
+  // 6 FP; precision 1/7 = 14.3 %, recall 100 %, F1 = 2·(1/7)/(8/7) = 25 %.
+  const std::string labels = tempPath("tool_labels");
+  std::filesystem::create_directories(labels);
+  const std::vector<GroundTruthObject> truth = truthOfFirstFrames();
+  ASSERT_EQ(truth.front().tracklet, 0);
+  const BoundingBox& b = truth.front().object.box;
+  std::ofstream(labels + "/000000.txt") << "Car 0.00 0 0 " << b.x_min << " " << b.y_min << " " << b.x_max
+                                        << " " << b.y_max << " 2.17 1.71 4.33 -8.0 1.65 25.0 0 static\n";
+  const std::string labelled = tempPath("tool_labelled");
+  ASSERT_EQ(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " --labels " + labels +
+                         " --detections " + bag + " --output " + labelled + " > /dev/null 2>&1")
+                            .c_str()),
+            0);
+  std::stringstream report;
+  report << std::ifstream(labelled + "/report.md").rdbuf();
+  EXPECT_NE(report.str().find("| staticCar | 14.3 | 100.0 | 25.0 | 1 | 1 | 6 |"), std::string::npos)
+      << report.str();
+
   // Usage errors exit with 2, bad input with 1 and a message naming the file.
-  EXPECT_EQ(WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " > /dev/null 2>&1").c_str())), 2);
-  EXPECT_EQ(WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " --detections " + bag +
-                                     " --output " + out + " --iou 2 > /dev/null 2>&1")
-                                        .c_str())),
+  EXPECT_EQ(WEXITSTATUS(std::system(
+                (std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " > /dev/null 2>&1").c_str())),
             2);
-  ASSERT_EQ(WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive /nonexistent/drive --detections " +
-                                     bag + " --output " + out + " > " + log + " 2>&1")
-                                        .c_str())),
-            1);
+  EXPECT_EQ(
+      WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " --detections " +
+                               bag + " --output " + out + " --iou 2 > /dev/null 2>&1")
+                                  .c_str())),
+      2);
+  ASSERT_EQ(
+      WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive /nonexistent/drive --detections " +
+                               bag + " --output " + out + " > " + log + " 2>&1")
+                                  .c_str())),
+      1);
   std::stringstream error;
   error << std::ifstream(log).rdbuf();
   EXPECT_NE(error.str().find("/nonexistent/drive/image_02/timestamps.txt"), std::string::npos) << error.str();

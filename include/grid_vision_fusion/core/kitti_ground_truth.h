@@ -62,14 +62,15 @@ struct KittiDrive
   std::vector<KittiStamp> stamps;                 ///< image_02/timestamps.txt, one per frame
   std::vector<Eigen::Isometry3d> world_from_imu;  ///< OXTS poses relative to the first frame
   KittiRawCalibration calibration;
-  std::vector<Tracklet> tracklets;                ///< empty when not read
+  std::vector<Tracklet> tracklets;  ///< empty when not read
 
   /// Reads `drive_dir`/image_02/timestamps.txt, `drive_dir`/oxts/data/*.txt, the calibration of
   /// `calibration_dir` (empty: the parent folder of drive_dir) and, when `with_tracklets`,
   /// `drive_dir`/tracklet_labels.xml.
   /// @throws std::runtime_error naming the file at fault, or when the numbers of timestamps and
   /// OXTS records differ.
-  static KittiDrive read(const std::string& drive_dir, const std::string& calibration_dir, bool with_tracklets);
+  static KittiDrive read(const std::string& drive_dir, const std::string& calibration_dir,
+                         bool with_tracklets);
 
   int frameCount() const { return static_cast<int>(stamps.size()); }
   /// world ← velodyne of frame `frame`. @throws std::out_of_range for a frame outside the drive.
@@ -81,11 +82,11 @@ struct KittiDrive
 /// One ground-truth object with what the evaluation does not carry.
 struct GroundTruthObject
 {
-  EvalObject object;   ///< as handed to evaluate(); frame = kittiFrameName(frame_index)
+  EvalObject object;  ///< as handed to evaluate(); frame = kittiFrameName(frame_index)
   int frame_index = 0;
-  int tracklet = -1;   ///< index in the tracklet list (−1 for label files)
-  double truncation = 0.0;       ///< of the projected box, [0, 1]
-  double speed_mps = 0.0;        ///< horizontal world speed (tracklets only)
+  int tracklet = -1;        ///< index in the tracklet list (−1 for label files)
+  double truncation = 0.0;  ///< of the projected box, [0, 1]
+  double speed_mps = 0.0;   ///< horizontal world speed (tracklets only)
   Eigen::Vector3d velo_center = Eigen::Vector3d::Zero();  ///< box centre, velodyne frame [m]
 };
 
@@ -94,21 +95,22 @@ struct GroundTruthObject
 /// velodyne frame) projected with P_rect_0c · R_rect_00 · Tr_velo_to_cam, edges clipped against
 /// the near plane first, then the box clipped to [0, W−1] × [0, H−1]. Returns false when nothing
 /// of the box is in front of the camera and inside the image.
-bool projectVeloBox(const KittiRawCalibration& calibration, int camera, const Eigen::Vector3d& bottom_center_velo,
-                    double yaw, double length, double width, double height, double near_plane_m, BoundingBox& box,
-                    double& truncation);
+bool projectVeloBox(const KittiRawCalibration& calibration, int camera,
+                    const Eigen::Vector3d& bottom_center_velo, double yaw, double length, double width,
+                    double height, double near_plane_m, BoundingBox& box, double& truncation);
 
 /// Velocity at sample `j` of a trajectory from differences over ±half_window samples (one-sided
 /// at the ends): (p[hi] − p[lo]) / (t[hi] − t[lo]). Zero when the trajectory has one sample.
 /// @throws std::invalid_argument when sizes differ or the times do not increase.
-Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& times,
-                                   std::size_t j, int half_window);
+Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions,
+                                   const std::vector<double>& times, std::size_t j, int half_window);
 
 /// Ground truth of every tracklet pose of `drive` (see the file comment and the config). A
 /// tracklet with a single pose has no velocity: motion unknown and difficult. Boxes that do not
 /// project into the image are left out.
 /// @throws std::runtime_error when a tracklet has poses beyond the drive's frames.
-std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive, const KittiGroundTruthConfig& config);
+std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive,
+                                                   const KittiGroundTruthConfig& config);
 
 /// One line of a label file with a motion column.
 struct MotionLabel

@@ -26,9 +26,9 @@ namespace grid_vision_fusion
 /// Parameters of readDetectionBag().
 struct DetectionBagConfig
 {
-  std::string topic = "/objects";      ///< DetectedObjectArray topic in the bag
-  double stamp_tolerance_s = 0.05;     ///< largest |header stamp − image stamp| of a match [s], > 0
-  std::string world_frame = "world";   ///< expected header.frame_id (others are counted)
+  std::string topic = "/objects";     ///< DetectedObjectArray topic in the bag
+  double stamp_tolerance_s = 0.05;    ///< largest |header stamp − image stamp| of a match [s], > 0
+  std::string world_frame = "world";  ///< expected header.frame_id (others are counted)
 
   /// @throws std::invalid_argument naming the bad field.
   void validate() const;
