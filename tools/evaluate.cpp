@@ -253,6 +253,13 @@ int run(const Options& o)
   const gvf::DetectionBagStats& s = bag.stats;
   std::cerr << "Detections: " << bag.detections.size() << " objects in " << bag.frames.size()
             << " frames from " << s.messages << " messages on " << o.bag.topic << "\n";
+  if (bag.frames.empty())
+  {
+    throw std::runtime_error("none of the " + std::to_string(s.messages) + " messages on " + o.bag.topic +
+                             " of " + o.detections + " lies within " +
+                             std::to_string(o.bag.stamp_tolerance_s) + " s of a time stamp of " + o.drive +
+                             "/image_02/timestamps.txt: is the bag from this drive?");
+  }
   if (s.unmatched > 0)
   {
     std::cerr << "warning: " << s.unmatched << " messages have no image time stamp within "

@@ -419,6 +419,22 @@ TEST(EvaluateTool, WritesTheOutputsAndPrintsTheTables)
   std::stringstream error;
   error << std::ifstream(log).rdbuf();
   EXPECT_NE(error.str().find("/nonexistent/drive/image_02/timestamps.txt"), std::string::npos) << error.str();
+
+  // A bag of another drive (stamps an hour off): no message matches a frame, an error.
+  std::map<int, DetectedObjectArray> late = perfectMessages();
+  for (auto& [f, msg] : late)
+  {
+    msg.header.stamp += ros::Duration(3600.0);
+  }
+  const std::string other_drive = writeBag("other_drive", late);
+  ASSERT_EQ(
+      WEXITSTATUS(std::system((std::string(GVF_EVALUATE_TOOL) + " --drive " + kDrive + " --detections " +
+                               other_drive + " --output " + out + " > " + log + " 2>&1")
+                                  .c_str())),
+      1);
+  std::stringstream no_match;
+  no_match << std::ifstream(log).rdbuf();
+  EXPECT_NE(no_match.str().find("none of the 5 messages"), std::string::npos) << no_match.str();
 }
 
 }  // namespace grid_vision_fusion
