@@ -9,6 +9,7 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
+#include <unistd.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -111,7 +112,7 @@ int main(int argc, char** argv)
     std::map<std::size_t, std::size_t> frames_with_n_objects;
     std::size_t frames = 0, images = 0;
     cv::VideoWriter video;
-    grid_vision_fusion::ProgressBar bar("messages", view.size());
+    grid_vision_fusion::ProgressBar bar(std::cerr, view.size(), "messages", isatty(STDERR_FILENO) != 0);
     std::size_t done = 0;
     for (const rosbag::MessageInstance& m : view)
     {

@@ -4,6 +4,7 @@
 //       [--scenario config/synthetic_drive.yaml] [--calibration data/calibration/2011_09_26]
 //       [--drive 9001] [--frames N] [--seed S] [--from-drive RECORDED_DRIVE_DIR]
 #include <ros/package.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <iostream>
@@ -162,7 +163,7 @@ int main(int argc, char** argv)
     std::cerr << "make_synthetic_drive: " << scenario_path << ": " << scenario.actors.size() << " actors, "
               << scenario.scenery.size() << " buildings, " << frames << " frames at " << scenario.frame_rate_hz
               << " Hz\n";
-    ProgressBar bar("frames", static_cast<std::size_t>(frames));
+    ProgressBar bar(std::cerr, static_cast<std::size_t>(frames), "frames", isatty(STDERR_FILENO) != 0);
     const SyntheticDriveSummary summary = writeSyntheticDrive(
         scenario, options, [&](int done, int) { bar.update(static_cast<std::size_t>(done)); });
     bar.finish();

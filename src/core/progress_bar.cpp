@@ -1,42 +1,52 @@
 #include "grid_vision_fusion/core/progress_bar.h"
 
-#include <unistd.h>
-
 #include <algorithm>
+#include <stdexcept>
 
 namespace grid_vision_fusion
 {
-namespace
+ProgressBar::ProgressBar(std::ostream& out, std::size_t total, std::string label, bool interactive, int width)
+    : out_(out), total_(total), label_(std::move(label)), interactive_(interactive), width_(width)
 {
-constexpr int kBarWidth = 30;
-constexpr int kPlainLinePercentStep = 25;  // without a terminal: a line at 0, 25, 50, 75, 100 %
-}  // namespace
+  if (width_ < 1)
+  {
+    throw std::invalid_argument("progress bar width must be >= 1, got " + std::to_string(width_));
+  }
+}
 
-ProgressBar::ProgressBar(std::string label, std::size_t total, std::FILE* stream)
-  : label_(std::move(label))
-  , total_(std::max<std::size_t>(total, 1))
-  , stream_(stream)
-  , terminal_(isatty(fileno(stream)) != 0)
-  , start_(std::chrono::steady_clock::now())
+std::string ProgressBar::render(std::size_t done, std::size_t total, int width)
 {
+  done = std::min(done, total);
+  const std::size_t w = static_cast<std::size_t>(std::max(width, 1));
+  const std::size_t filled = total == 0 ? w : done * w / total;
+  return "[" + std::string(filled, '#') + std::string(w - filled, ' ') + "] " + std::to_string(done) + "/" +
+         std::to_string(total);
 }
 
 void ProgressBar::update(std::size_t done)
 {
-  done = std::min(done, total_);
-  if (terminal_)
+  if (finished_)
   {
-    if (done != last_drawn_ || done == 0)
+    return;
+  }
+  done_ = std::min(done, total_);
+  if (interactive_)
+  {
+    const std::string line = label_ + " " + render(done_, total_, width_);
+    if (line != last_drawn_)
     {
-      draw(done, false);
+      out_ << '\r' << line << std::flush;
+      last_drawn_ = line;
     }
     return;
   }
-  const int percent = static_cast<int>(100 * done / total_);
-  if (percent / kPlainLinePercentStep > last_percent_line_)
+  const int quarter = total_ == 0 ? 4 : static_cast<int>(done_ * 4 / total_);
+  if (quarter != last_quarter_)
   {
-    last_percent_line_ = percent / kPlainLinePercentStep;
-    draw(done, true);
+    out_ << label_ << ": " << done_ << "/" << total_ << " (" << (total_ == 0 ? 100 : done_ * 100 / total_)
+         << " %)\n"
+         << std::flush;
+    last_quarter_ = quarter;
   }
 }
 
@@ -46,26 +56,12 @@ void ProgressBar::finish()
   {
     return;
   }
+  update(total_);
   finished_ = true;
-  if (terminal_ || last_percent_line_ < 100 / kPlainLinePercentStep)
+  if (interactive_)
   {
-    draw(total_, true);
+    out_ << '\n' << std::flush;
   }
-}
-
-void ProgressBar::draw(std::size_t done, bool final_line)
-{
-  last_drawn_ = done;
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const int filled = static_cast<int>(kBarWidth * done / total_);
-  const std::string bar = std::string(static_cast<std::size_t>(filled), '#') +
-                          std::string(static_cast<std::size_t>(kBarWidth - filled), ' ');
-  const double rate = elapsed > 0.0 ? static_cast<double>(done) / elapsed : 0.0;
-  const double remaining = rate > 0.0 ? static_cast<double>(total_ - done) / rate : 0.0;
-  std::fprintf(stream_, "%s[%s] %zu/%zu %s  %.1f s elapsed, %.1f s left%s", terminal_ ? "\r" : "", bar.c_str(), done,
-               total_, label_.c_str(), elapsed, remaining, final_line || !terminal_ ? "\n" : "");
-  std::fflush(stream_);
 }
 
 }  // namespace grid_vision_fusion

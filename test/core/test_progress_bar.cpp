@@ -1,39 +1,51 @@
-// Tests of the progress bar's output to a file (no terminal: plain lines at 25 % steps).
+// Tests of the command-line progress bar.
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <string>
+#include <sstream>
 
 #include "grid_vision_fusion/core/progress_bar.h"
 
 namespace grid_vision_fusion
 {
-TEST(ProgressBar, PlainLinesWithoutATerminal)
+TEST(ProgressBar, RendersTheFilledFraction)
 {
-  std::FILE* file = std::tmpfile();
-  ASSERT_NE(file, nullptr);
+  EXPECT_EQ(ProgressBar::render(0, 108, 10), "[          ] 0/108");
+  EXPECT_EQ(ProgressBar::render(43, 108, 10), "[###       ] 43/108");  // 430/108 = 3.98 → 3
+  EXPECT_EQ(ProgressBar::render(108, 108, 10), "[##########] 108/108");
+  EXPECT_EQ(ProgressBar::render(500, 108, 4), "[####] 108/108");  // clamped
+  EXPECT_EQ(ProgressBar::render(0, 0, 4), "[####] 0/0");
+}
+
+TEST(ProgressBar, TerminalRedrawsOneLineOnlyWhenItChanges)
+{
+  std::ostringstream out;
+  ProgressBar bar(out, 4, "frames", true, 4);
+  bar.update(1);
+  bar.update(1);
+  bar.update(2);
+  bar.finish();
+  bar.finish();
+  EXPECT_EQ(out.str(), "\rframes [#   ] 1/4\rframes [##  ] 2/4\rframes [####] 4/4\n");
+}
+
+TEST(ProgressBar, PlainOutputPrintsAtEveryQuarter)
+{
+  std::ostringstream out;
+  ProgressBar bar(out, 8, "frames", false);
+  for (std::size_t i = 0; i <= 8; ++i)
   {
-    ProgressBar bar("frames", 8, file);
-    for (std::size_t i = 1; i <= 8; ++i)
-    {
-      bar.update(i);
-    }
-    bar.finish();
-    bar.finish();  // idempotent
+    bar.update(i);
   }
-  std::rewind(file);
-  std::string text;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof(buffer), file))
-  {
-    text += buffer;
-  }
-  std::fclose(file);
-  // 2/8 = 25 %, 4/8, 6/8, 8/8: four lines, no carriage returns.
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 4) << text;
-  EXPECT_EQ(text.find('\r'), std::string::npos);
-  EXPECT_NE(text.find("[###############               ] 4/8 frames"), std::string::npos) << text;
-  EXPECT_NE(text.find("[##############################] 8/8 frames"), std::string::npos) << text;
+  bar.finish();
+  EXPECT_EQ(out.str(),
+            "frames: 0/8 (0 %)\nframes: 2/8 (25 %)\nframes: 4/8 (50 %)\nframes: 6/8 (75 %)\n"
+            "frames: 8/8 (100 %)\n");
+}
+
+TEST(ProgressBar, RejectsAZeroWidth)
+{
+  std::ostringstream out;
+  EXPECT_THROW(ProgressBar(out, 1, "x", true, 0), std::invalid_argument);
 }
 
 }  // namespace grid_vision_fusion

@@ -1,35 +1,39 @@
-// A terminal progress bar for the long-running tools: redrawn in place on a terminal, a few
-// plain lines when the output is a file or a pipe (CI logs).
+// A terminal progress bar for the command-line tools: on a terminal one line redrawn in place
+// ("\r<label> [####      ] 40/108"), otherwise (a log file, a pipe) a few plain lines
+// ("<label>: 27/108 (25 %)") at every quarter, so logs stay short.
 #pragma once
 
-#include <chrono>
-#include <cstdio>
+#include <cstddef>
+#include <ostream>
 #include <string>
 
 namespace grid_vision_fusion
 {
-/// Progress of `total` steps, written to a stdio stream (stderr by default).
 class ProgressBar
 {
 public:
-  /// @param label what is counted, e.g. "frames"; @param total number of steps, > 0.
-  ProgressBar(std::string label, std::size_t total, std::FILE* stream = stderr);
-  /// Reports that `done` steps are complete (monotonic); redraws when useful.
+  /// `total` steps (0 is allowed: nothing to show until finish()); `interactive`: `out` is a
+  /// terminal; `width`: characters between the brackets (≥ 1).
+  ProgressBar(std::ostream& out, std::size_t total, std::string label, bool interactive, int width = 40);
+
+  /// Reports `done` steps (clamped to total). Draws only when the output changes.
   void update(std::size_t done);
-  /// Draws the final state and ends the line.
+  /// Draws the final state and ends the line. Idempotent.
   void finish();
 
-private:
-  void draw(std::size_t done, bool final_line);
+  /// The bar of `done` of `total` steps: "[####      ] 40/108" (width characters in brackets).
+  static std::string render(std::size_t done, std::size_t total, int width);
 
-  std::string label_;
+private:
+  std::ostream& out_;
   std::size_t total_;
-  std::FILE* stream_;
-  bool terminal_;
-  std::size_t last_drawn_ = 0;
-  int last_percent_line_ = 0;  // without a terminal: the last 25 % step drawn
+  std::string label_;
+  bool interactive_;
+  int width_;
+  std::size_t done_ = 0;
+  std::string last_drawn_;
+  int last_quarter_ = -1;
   bool finished_ = false;
-  std::chrono::steady_clock::time_point start_;
 };
 
 }  // namespace grid_vision_fusion

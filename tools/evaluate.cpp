@@ -1,0 +1,329 @@
+// evaluate: scores the detections of a run (a bag of DetectedObjectArray) against the ground
+// truth of a KITTI raw drive (tracklets + OXTS + calibration, or label files with a motion
+// column) and writes metrics.json, report.md, the Cartucho/mAP folders and the plots.
+//
+//   rosrun grid_vision_fusion evaluate --drive <drive_sync dir> --detections <bag> --output <dir>
+//
+// Progress and notes go to stderr, the report tables to stdout. See doc/evaluate.md.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/core/evaluation.h"
+#include "grid_vision_fusion/core/evaluation_report.h"
+#include "grid_vision_fusion/core/kitti_ground_truth.h"
+#include "grid_vision_fusion/core/progress_bar.h"
+#include "grid_vision_fusion/ros/detection_bag.h"
+
+namespace gvf = grid_vision_fusion;
+
+namespace
+{
+const char* const kUsage = R"(usage: evaluate --drive <dir> --detections <bag> --output <dir> [options]
+
+Scores the detections of a run against the ground truth of a KITTI raw drive.
+
+required:
+  --drive <dir>            KITTI raw synced drive (image_02/timestamps.txt, oxts/, tracklet_labels.xml)
+  --detections <bag>       bag with grid_vision_fusion/DetectedObjectArray messages
+  --output <dir>           where metrics.json, report.md, ground-truth/, detection-results/ and
+                           the PNG plots are written (created if needed)
+options:
+  --calibration <dir>      folder of calib_cam_to_cam.txt, calib_velo_to_cam.txt,
+                           calib_imu_to_velo.txt (default: the parent folder of --drive)
+  --labels <dir>           ground truth from label files <frame>.txt (KITTI object format plus a
+                           final static/dynamic column) instead of tracklet_labels.xml; the drive
+                           still gives the time stamps and the ego poses
+  --topic <name>           DetectedObjectArray topic (default /objects)
+  --world-frame <name>     expected header.frame_id of the detections (default world)
+  --stamp-tolerance <s>    largest |message stamp - image stamp| of a match (default 0.05)
+  --max-range <m>          longitudinal distance limit (default 30)
+  --iou <x>                IoU of a true positive, (0, 1] (default 0.5)
+  --dynamic-speed <m/s>    ground truth faster than this is dynamic (default 0.5)
+  --max-truncation <x>     ground truth truncated more than this is difficult (default 0.5)
+  --difficult-occlusion <n> ground truth occluded this much or more is difficult (default 2)
+  --classes <a,b,...>      evaluate only these (lower-case) classes, e.g. car,van (default: all)
+  --map <from=to,...>      rename classes (lower-case; "from=" drops a class), e.g. truck=van
+  --no-motion-classes      classes without the motion prefix (car instead of staticCar/dynamicCar)
+  --all-frames             count the ground truth of every frame, also of frames without a
+                           detection message (default: only frames the bag covers)
+  -h, --help               this text
+)";
+
+struct Options
+{
+  std::string drive, calibration, labels, detections, output;
+  gvf::DetectionBagConfig bag;
+  gvf::EvaluationConfig evaluation;
+  gvf::KittiGroundTruthConfig truth;
+  bool all_frames = false;
+};
+
+class UsageError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+double toNumber(const std::string& option, const std::string& text)
+{
+  try
+  {
+    std::size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size())
+    {
+      return value;
+    }
+  }
+  catch (const std::exception&)
+  {
+  }
+  throw UsageError(option + " expects a number, got '" + text + "'");
+}
+
+int toInteger(const std::string& option, const std::string& text)
+{
+  const double value = toNumber(option, text);
+  if (value != std::floor(value) || std::abs(value) > 1e6)
+  {
+    throw UsageError(option + " expects an integer, got '" + text + "'");
+  }
+  return static_cast<int>(value);
+}
+
+std::vector<std::string> splitComma(const std::string& text)
+{
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, ',');)
+  {
+    if (!part.empty())
+    {
+      parts.push_back(part);
+    }
+  }
+  return parts;
+}
+
+Options parseArguments(int argc, char** argv)
+{
+  Options o;
+  std::vector<std::string> keep_only;
+  // Options with a value: name → what to do with it.
+  const std::map<std::string, std::function<void(const std::string&, const std::string&)>> with_value{
+      {"--drive", [&](const std::string&, const std::string& v) { o.drive = v; }},
+      {"--calibration", [&](const std::string&, const std::string& v) { o.calibration = v; }},
+      {"--labels", [&](const std::string&, const std::string& v) { o.labels = v; }},
+      {"--detections", [&](const std::string&, const std::string& v) { o.detections = v; }},
+      {"--output", [&](const std::string&, const std::string& v) { o.output = v; }},
+      {"--topic", [&](const std::string&, const std::string& v) { o.bag.topic = v; }},
+      {"--world-frame", [&](const std::string&, const std::string& v) { o.bag.world_frame = v; }},
+      {"--stamp-tolerance",
+       [&](const std::string& n, const std::string& v) { o.bag.stamp_tolerance_s = toNumber(n, v); }},
+      {"--max-range",
+       [&](const std::string& n, const std::string& v) { o.evaluation.max_longitudinal_m = toNumber(n, v); }},
+      {"--iou",
+       [&](const std::string& n, const std::string& v) { o.evaluation.iou_threshold = toNumber(n, v); }},
+      {"--dynamic-speed",
+       [&](const std::string& n, const std::string& v) { o.truth.dynamic_speed_mps = toNumber(n, v); }},
+      {"--max-truncation",
+       [&](const std::string& n, const std::string& v) { o.truth.max_truncation = toNumber(n, v); }},
+      {"--difficult-occlusion",
+       [&](const std::string& n, const std::string& v) { o.truth.difficult_occlusion = toInteger(n, v); }},
+      {"--classes", [&](const std::string&, const std::string& v) { keep_only = splitComma(v); }},
+      {"--map",
+       [&](const std::string&, const std::string& v)
+       {
+         for (const std::string& pair : splitComma(v))
+         {
+           const auto eq = pair.find('=');
+           if (eq == std::string::npos || eq == 0)
+           {
+             throw UsageError("--map expects from=to pairs, got '" + pair + "'");
+           }
+           o.truth.class_map[pair.substr(0, eq)] = pair.substr(eq + 1);
+         }
+       }},
+  };
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    const auto option = with_value.find(arg);
+    if (arg == "-h" || arg == "--help")
+    {
+      std::cout << kUsage;
+      std::exit(0);
+    }
+    else if (arg == "--no-motion-classes")
+    {
+      o.evaluation.motion_classes = false;
+    }
+    else if (arg == "--all-frames")
+    {
+      o.all_frames = true;
+    }
+    else if (option != with_value.end())
+    {
+      if (i + 1 >= argc)
+      {
+        throw UsageError(arg + " expects a value");
+      }
+      option->second(arg, argv[++i]);
+    }
+    else
+    {
+      throw UsageError("unknown argument '" + arg + "'");
+    }
+  }
+  if (o.drive.empty() || o.detections.empty() || o.output.empty())
+  {
+    throw UsageError("--drive, --detections and --output are required");
+  }
+  if (!keep_only.empty())
+  {
+    // Keep the listed classes (after renaming): every other class is dropped.
+    o.truth.keep_unmapped = false;
+    const std::set<std::string> keep(keep_only.begin(), keep_only.end());
+    for (auto it = o.truth.class_map.begin(); it != o.truth.class_map.end(); ++it)
+    {
+      if (!keep.count(it->second))
+      {
+        it->second.clear();
+      }
+    }
+    for (const std::string& name : keep)
+    {
+      o.truth.class_map.emplace(name, name);
+    }
+  }
+  try
+  {
+    o.bag.validate();
+    o.evaluation.validate();
+    o.truth.validate();
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw UsageError(e.what());
+  }
+  return o;
+}
+
+int run(const Options& o)
+{
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  std::cerr << "Reading the drive " << o.drive << "\n";
+  const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, o.labels.empty());
+
+  std::vector<gvf::GroundTruthObject> truth =
+      o.labels.empty() ? gvf::trackletGroundTruth(drive, o.truth)
+                       : gvf::labelFolderGroundTruth(o.labels, drive.calibration, o.truth);
+  std::cerr << "Ground truth: " << truth.size() << " objects in " << drive.frameCount() << " frames from "
+            << (o.labels.empty() ? o.drive + "/tracklet_labels.xml" : o.labels) << "\n";
+
+  std::size_t bar_total = 0;
+  std::unique_ptr<gvf::ProgressBar> progress;
+  const gvf::DetectionBagResult bag = gvf::readDetectionBag(o.detections, drive, o.bag, o.truth,
+                                                            [&](std::size_t done, std::size_t total)
+                                                            {
+                                                              if (!progress || total != bar_total)
+                                                              {
+                                                                bar_total = total;
+                                                                progress = std::make_unique<gvf::ProgressBar>(
+                                                                    std::cerr, total, "detections", tty);
+                                                              }
+                                                              progress->update(done);
+                                                            });
+  if (progress)
+  {
+    progress->finish();
+  }
+  const gvf::DetectionBagStats& s = bag.stats;
+  std::cerr << "Detections: " << bag.detections.size() << " objects in " << bag.frames.size()
+            << " frames from " << s.messages << " messages on " << o.bag.topic << "\n";
+  if (bag.frames.empty())
+  {
+    throw std::runtime_error("none of the " + std::to_string(s.messages) + " messages on " + o.bag.topic +
+                             " of " + o.detections + " lies within " +
+                             std::to_string(o.bag.stamp_tolerance_s) + " s of a time stamp of " + o.drive +
+                             "/image_02/timestamps.txt: is the bag from this drive?");
+  }
+  if (s.unmatched > 0)
+  {
+    std::cerr << "warning: " << s.unmatched << " messages have no image time stamp within "
+              << o.bag.stamp_tolerance_s << " s (is the bag from this drive?); left out\n";
+  }
+  if (s.duplicates > 0)
+  {
+    std::cerr << "warning: " << s.duplicates
+              << " messages fall on a frame that already had one; the nearer in time is kept\n";
+  }
+  if (s.other_frame > 0)
+  {
+    std::cerr << "warning: " << s.other_frame << " messages are not in frame '" << o.bag.world_frame
+              << "': their positions are compared as if they were\n";
+  }
+  if (s.invalid_objects > 0)
+  {
+    std::cerr << "warning: " << s.invalid_objects
+              << " objects with a non-finite or inverted box, score or position left out\n";
+  }
+  if (!o.all_frames)
+  {
+    const std::size_t before = truth.size();
+    truth.erase(
+        std::remove_if(truth.begin(), truth.end(),
+                       [&](const gvf::GroundTruthObject& g) { return !bag.frames.count(g.frame_index); }),
+        truth.end());
+    if (truth.size() != before)
+    {
+      std::cerr << "Left out " << before - truth.size() << " ground-truth objects of the "
+                << drive.frameCount() - static_cast<int>(bag.frames.size())
+                << " frames without a detection message (--all-frames counts them)\n";
+    }
+  }
+
+  const std::vector<gvf::EvalObject> ground_truth = gvf::evalObjects(truth);
+  const gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
+  gvf::writeEvaluationOutputs(o.output, result, o.evaluation, ground_truth, bag.detections);
+  std::cout << gvf::reportMarkdown(result, o.evaluation);
+  std::cerr << "Wrote " << o.output
+            << "/metrics.json, report.md, ground-truth/, detection-results/ and the plots\n";
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options options;
+  try
+  {
+    options = parseArguments(argc, argv);
+  }
+  catch (const UsageError& e)
+  {
+    std::cerr << "evaluate: " << e.what() << "\n\n" << kUsage;
+    return 2;
+  }
+  try
+  {
+    return run(options);
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "\nevaluate: error: " << e.what() << "\n";
+    return 1;
+  }
+}
