@@ -10,7 +10,6 @@ set -o pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 workspace=${GVF_WORKSPACE:-$root/.workspace}
 jobs=${GVF_JOBS:-$(nproc)}
-# Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
 export PATH=/usr/bin:/bin:$PATH
 
 fail() {
@@ -19,19 +18,10 @@ fail() {
   exit 1
 }
 
-"$root/scripts/install_deps.sh" || fail "installing the Debian packages failed"
-
-mkdir -p "$workspace/src" || fail "cannot create the workspace $workspace"
-ln -sfn "$root" "$workspace/src/grid_vision_fusion"
-cd "$workspace" || fail "cannot enter $workspace"
-
-echo "[run_tests] building in $workspace (catkin_make, $jobs jobs)"
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$jobs" ||
-  fail "catkin_make failed"
-catkin_make tests -j"$jobs" || fail "building the tests failed"
-
+GVF_WORKSPACE=$workspace "$root/scripts/build.sh" || fail "installing the dependencies or building failed"
 # shellcheck disable=SC1091
 source "$workspace/devel/setup.bash" || fail "cannot source $workspace/devel/setup.bash"
+cd "$workspace" || fail "cannot enter $workspace"
 rm -rf "$workspace/build/test_results"
 echo "[run_tests] running the tests"
 # run_tests exits 0 even when tests fail: the verdict comes from the result files below.

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs the Debian packages that are missing and builds grid_vision_fusion (with its tests'
+# executables unless GVF_BUILD_TESTS=0) in a catkin workspace. Used by run_tests.sh and demo.sh.
+#
+# Usage: scripts/build.sh            (workspace in .workspace/ of the repository)
+#        GVF_WORKSPACE=/path scripts/build.sh
+set -eo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+workspace=${GVF_WORKSPACE:-$root/.workspace}
+jobs=${GVF_JOBS:-$(nproc)}
+# Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
+export PATH=/usr/bin:/bin:$PATH
+
+"$root/scripts/install_deps.sh"
+mkdir -p "$workspace/src"
+ln -sfn "$root" "$workspace/src/grid_vision_fusion"
+cd "$workspace"
+echo "[build] building in $workspace (catkin_make, $jobs jobs)"
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$jobs"
+if [[ "${GVF_BUILD_TESTS:-1}" != 0 ]]; then
+  catkin_make tests -j"$jobs"
+fi
