@@ -402,12 +402,14 @@ sensor_msgs::Imu oxtsToImu(const OxtsRecord& record, const ros::Time& stamp)
                                      Eigen::AngleAxisd(record.pitch, Eigen::Vector3d::UnitY()) *
                                      Eigen::AngleAxisd(record.roll, Eigen::Vector3d::UnitX()))
                                         .toRotationMatrix());
-  imu.angular_velocity.x = record.wf;
-  imu.angular_velocity.y = record.wl;
-  imu.angular_velocity.z = record.wu;
-  imu.linear_acceleration.x = record.af;
-  imu.linear_acceleration.y = record.al;
-  imu.linear_acceleration.z = record.au;
+  // The body-frame rates and accelerations (x front, y left, z top of the vehicle), as imu_link;
+  // wf/wl/wu and af/al/au are about the level (heading-only) frame.
+  imu.angular_velocity.x = record.wx;
+  imu.angular_velocity.y = record.wy;
+  imu.angular_velocity.z = record.wz;
+  imu.linear_acceleration.x = record.ax;
+  imu.linear_acceleration.y = record.ay;
+  imu.linear_acceleration.z = record.az;
   return imu;
 }
 
@@ -447,6 +449,11 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
 {
   options.validate();
   const std::string& drive = options.drive_dir;
+  std::error_code error;
+  if (!fs::is_directory(drive, error))
+  {
+    throw std::runtime_error("missing drive folder " + drive);
+  }
   const KittiRawCalibration calibration = KittiRawCalibration::readDirectory(options.calibrationDirectory());
 
   for (const int camera : options.cameras)
@@ -571,7 +578,6 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
       throw std::runtime_error("cannot finish bag " + temporary + ": " + e.what());
     }
   }
-  std::error_code error;
   fs::rename(temporary, options.output_bag, error);
   if (error)
   {

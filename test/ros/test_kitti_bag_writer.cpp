@@ -289,12 +289,13 @@ TEST_F(KittiDriveFixture, OxtsMessagesCarryTheRecordValues)
       }(),
       "oxts 1");
   const auto imu = bag.at("/kitti/oxts/imu")[1].instantiate<sensor_msgs::Imu>();
-  EXPECT_DOUBLE_EQ(imu->angular_velocity.x, record.wf);
-  EXPECT_DOUBLE_EQ(imu->angular_velocity.y, record.wl);
-  EXPECT_DOUBLE_EQ(imu->angular_velocity.z, record.wu);
-  EXPECT_DOUBLE_EQ(imu->linear_acceleration.x, record.af);
-  EXPECT_DOUBLE_EQ(imu->linear_acceleration.y, record.al);
-  EXPECT_DOUBLE_EQ(imu->linear_acceleration.z, record.au);
+  // Body frame values of record 1 (wx, wy, wz; ax, ay, az), by hand from the file.
+  EXPECT_DOUBLE_EQ(imu->angular_velocity.x, 0.0045821736870773);
+  EXPECT_DOUBLE_EQ(imu->angular_velocity.y, -0.013397509586964);
+  EXPECT_DOUBLE_EQ(imu->angular_velocity.z, -0.021380134026467);
+  EXPECT_DOUBLE_EQ(imu->linear_acceleration.x, -0.53556232143028);
+  EXPECT_DOUBLE_EQ(imu->linear_acceleration.y, 0.18671710579457);
+  EXPECT_DOUBLE_EQ(imu->linear_acceleration.z, 10.078281781295);  // gravity included (REP 145)
   // Orientation: back to roll, pitch, yaw (ZYX).
   const Eigen::Quaterniond q(imu->orientation.w, imu->orientation.x, imu->orientation.y, imu->orientation.z);
   const Eigen::Vector3d ypr = yawPitchRoll(q.toRotationMatrix());
@@ -303,16 +304,16 @@ TEST_F(KittiDriveFixture, OxtsMessagesCarryTheRecordValues)
   EXPECT_NEAR(ypr[2], record.roll, 1e-9);
 
   const auto fix = bag.at("/kitti/oxts/gps/fix")[1].instantiate<sensor_msgs::NavSatFix>();
-  // Frame 1 of drive 0001, read off the file by hand.
   EXPECT_DOUBLE_EQ(fix->latitude, record.lat);
-  EXPECT_NEAR(fix->latitude, 49.015, 0.001);
-  EXPECT_NEAR(fix->longitude, 8.434, 0.001);
+  EXPECT_DOUBLE_EQ(fix->latitude, 49.014997147797);
+  EXPECT_DOUBLE_EQ(fix->longitude, 8.4342801643975);
   EXPECT_DOUBLE_EQ(fix->altitude, record.alt);
   EXPECT_DOUBLE_EQ(fix->position_covariance[0], record.pos_accuracy * record.pos_accuracy);
 
   const auto vel = bag.at("/kitti/oxts/gps/vel")[1].instantiate<geometry_msgs::TwistStamped>();
-  EXPECT_DOUBLE_EQ(vel->twist.linear.x, record.vf);
-  EXPECT_DOUBLE_EQ(vel->twist.angular.z, record.wu);
+  EXPECT_DOUBLE_EQ(vel->twist.linear.x, 13.129879921905);  // vf
+  EXPECT_DOUBLE_EQ(vel->twist.linear.y, record.vl);
+  EXPECT_DOUBLE_EQ(vel->twist.angular.z, -0.021891250950339);  // wu
 }
 
 TEST_F(KittiDriveFixture, TfOfFrameOneIsTheOxtsPoseRelativeToFrameZero)
@@ -594,6 +595,13 @@ TEST_F(KittiDriveFixture, ShortTimestampsFileIsAnErrorNamingTheFile)
   in.close();
   std::ofstream(path) << text;
   expectFailureNaming(options(), path);
+}
+
+TEST_F(KittiDriveFixture, MissingDriveFolderIsAnErrorNamingIt)
+{
+  KittiBagOptions opts = options();
+  opts.drive_dir = root_ + "/no_such_drive";
+  expectFailureNaming(opts, opts.drive_dir);
 }
 
 TEST_F(KittiDriveFixture, MissingOxtsRecordIsAnErrorNamingTheFile)

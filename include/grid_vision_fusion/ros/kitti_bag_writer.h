@@ -135,8 +135,11 @@ sensor_msgs::PointCloud2 readVelodyneScan(const std::string& path, const ros::Ti
 sensor_msgs::Image readKittiImage(const std::string& path, int camera, std::uint32_t expected_width,
                                   std::uint32_t expected_height, const ros::Time& stamp);
 
-/// IMU message of an OXTS record in imu_link: orientation from roll, pitch, yaw (Rz·Ry·Rx),
-/// angular velocity (wf, wl, wu), linear acceleration (af, al, au). Covariances unknown (zeros).
+/// IMU message of an OXTS record in imu_link: orientation from roll, pitch, yaw (Rz·Ry·Rx, ENU),
+/// angular velocity (wx, wy, wz) [rad/s] and linear acceleration (ax, ay, az) [m/s², gravity
+/// included] in the vehicle body frame (x front, y left, z top), as kitti2bag. Not wf/wl/wu,
+/// af/al/au: those are about the level frame (rotated by the heading only), not about imu_link.
+/// Covariances unknown (zeros).
 sensor_msgs::Imu oxtsToImu(const OxtsRecord& record, const ros::Time& stamp);
 
 /// GPS fix of an OXTS record in imu_link: latitude, longitude [deg], altitude [m]; position
