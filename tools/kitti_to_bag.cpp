@@ -1,5 +1,6 @@
 // kitti_to_bag: converts a KITTI raw synced drive into a ROS bag with kitti2bag's topic and frame
 // names and the camera model of the rectified images (see doc/kitti_to_bag.md).
+#include "grid_vision_fusion/core/progress_bar.h"
 #include "grid_vision_fusion/ros/kitti_bag_writer.h"
 
 #include <ros/time.h>
@@ -10,6 +11,7 @@
 #include <cstdlib>
 #include <exception>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -19,7 +21,6 @@ namespace
 {
 constexpr int kExitUsage = 2;
 constexpr int kExitFailure = 1;
-constexpr int kBarWidth = 30;
 
 const char* const kUsage =
     "Usage: kitti_to_bag [options] DRIVE_DIR OUTPUT.bag\n"
@@ -153,50 +154,6 @@ bool parseArguments(int argc, char** argv, grid_vision_fusion::KittiBagOptions& 
   return true;
 }
 
-/// Progress on stderr: a redrawn bar on a terminal, a line per ~10 % otherwise (logs, CI).
-class ProgressReporter
-{
-public:
-  explicit ProgressReporter(bool quiet) : quiet_(quiet), tty_(isatty(fileno(stderr)) != 0) {}
-
-  void update(std::size_t done, std::size_t total)
-  {
-    if (quiet_ || total == 0)
-    {
-      return;
-    }
-    if (tty_)
-    {
-      const auto filled = static_cast<int>(kBarWidth * done / total);
-      std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(static_cast<std::size_t>(filled), '#').c_str(),
-                   std::string(static_cast<std::size_t>(kBarWidth - filled), ' ').c_str(), done, total);
-      if (done == total)
-      {
-        std::fputc('\n', stderr);
-      }
-      std::fflush(stderr);
-      return;
-    }
-    const std::size_t step = total >= 10 ? total / 10 : 1;
-    if (done % step == 0 || done == total)
-    {
-      std::fprintf(stderr, "kitti_to_bag: %zu/%zu frames\n", done, total);
-    }
-  }
-
-  /// Ends a partly drawn bar before an error message.
-  void interrupt()
-  {
-    if (!quiet_ && tty_)
-    {
-      std::fputc('\n', stderr);
-    }
-  }
-
-private:
-  bool quiet_;
-  bool tty_;
-};
 }  // namespace
 
 int main(int argc, char** argv)
@@ -218,11 +175,25 @@ int main(int argc, char** argv)
   }
 
   ros::Time::init();
-  ProgressReporter progress(quiet);
-  options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  std::unique_ptr<grid_vision_fusion::ProgressBar> progress;
+  if (!quiet)
+  {
+    options.progress = [&progress, terminal](std::size_t done, std::size_t total) {
+      if (!progress)
+      {
+        progress = std::make_unique<grid_vision_fusion::ProgressBar>(std::cerr, total, "kitti_to_bag frames", terminal);
+      }
+      progress->update(done);
+    };
+  }
   try
   {
     const grid_vision_fusion::KittiBagSummary summary = grid_vision_fusion::convertKittiDrive(options);
+    if (progress)
+    {
+      progress->finish();
+    }
     if (!quiet)
     {
       std::cerr << "kitti_to_bag: wrote " << summary.frames << " frames (" << summary.messages << " messages) to "
@@ -231,7 +202,10 @@ int main(int argc, char** argv)
   }
   catch (const std::exception& e)
   {
-    progress.interrupt();
+    if (progress && terminal)
+    {
+      std::cerr << '\n';  // end the partly drawn bar
+    }
     std::cerr << "kitti_to_bag: error: " << e.what() << "\n";
     return kExitFailure;
   }

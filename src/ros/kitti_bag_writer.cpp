@@ -550,17 +550,25 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
       write(kGpsFixTopic, oxts_stamp, oxtsToNavSatFix(records[local], oxts_stamp));
       write(kGpsVelTopic, oxts_stamp, oxtsToTwist(records[local], oxts_stamp));
 
+      // Sensor messages carry the KITTI frame index in header.seq, so that per-frame files
+      // (e.g. label_2 for the detection replay) can be found from a message.
       const ros::Time velo_stamp = toRosTime(velo_stamps[index]);
-      write(kVeloTopic, velo_stamp, readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp));
+      sensor_msgs::PointCloud2 cloud = readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp);
+      cloud.header.seq = static_cast<std::uint32_t>(frame);
+      write(kVeloTopic, velo_stamp, cloud);
 
       for (std::size_t c = 0; c < cameras.size(); ++c)
       {
         const int camera = options.cameras[c];
         const auto& size = calibration.image_size[static_cast<std::size_t>(camera)];
         const ros::Time stamp = toRosTime(camera_stamps[c][index]);
-        write(cameras[c].image_topic, stamp,
-              readKittiImage(frameFile(drive, cameras[c].folder, frame, ".png"), camera, size[0], size[1], stamp));
-        write(cameras[c].info_topic, stamp, kittiCameraInfo(calibration, camera, stamp));
+        sensor_msgs::Image image =
+            readKittiImage(frameFile(drive, cameras[c].folder, frame, ".png"), camera, size[0], size[1], stamp);
+        image.header.seq = static_cast<std::uint32_t>(frame);
+        write(cameras[c].image_topic, stamp, image);
+        sensor_msgs::CameraInfo info = kittiCameraInfo(calibration, camera, stamp);
+        info.header.seq = static_cast<std::uint32_t>(frame);
+        write(cameras[c].info_topic, stamp, info);
       }
 
       ++summary.frames;

@@ -260,13 +260,16 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
     EXPECT_EQ(cloud->header.stamp, velo[k]);
     EXPECT_EQ(bag.at("/kitti/velo/pointcloud")[k].getTime(), velo[k]);
     EXPECT_EQ(cloud->header.frame_id, "velo_link");
+    EXPECT_EQ(cloud->header.seq, k) << "header.seq is the KITTI frame index";
 
     const auto img = bag.at("/kitti/camera_color_left/image_raw")[k].instantiate<sensor_msgs::Image>();
     EXPECT_EQ(img->header.stamp, image[k]);
     EXPECT_EQ(img->header.frame_id, "camera_color_left");
+    EXPECT_EQ(img->header.seq, k);
     const auto info = bag.at("/kitti/camera_color_left/camera_info")[k].instantiate<sensor_msgs::CameraInfo>();
     EXPECT_EQ(info->header.stamp, image[k]);
     EXPECT_EQ(info->header.frame_id, "camera_color_left");
+    EXPECT_EQ(info->header.seq, k);
   }
   // /tf_static comes first (before every sensor message of frame 0) and is stored latched.
   const rosbag::MessageInstance& static_tf = bag.at("/tf_static")[0];
@@ -651,7 +654,7 @@ TEST_F(KittiToBagTool, ConvertsAndReportsProgress)
 {
   std::string output;
   EXPECT_EQ(run("--last 2 --cameras 2,3 " + drive_ + " " + bag_, output), 0) << output;
-  EXPECT_NE(output.find("3/3 frames"), std::string::npos) << output;
+  EXPECT_NE(output.find("kitti_to_bag frames: 3/3 (100 %)"), std::string::npos) << output;
   EXPECT_EQ(readBag().at("/kitti/camera_color_right/image_raw").size(), 3U);
 }
 
