@@ -16,6 +16,7 @@ if(benchmark_FOUND)
   target_include_directories(bench_dynamic_grid PRIVATE test/core)
   target_link_libraries(bench_dynamic_grid grid_vision_fusion_core gvf_box_world_lidar benchmark::benchmark)
   target_compile_options(bench_dynamic_grid PRIVATE ${GVF_WARNINGS})
+  gvf_rosrun_executable(bench_dynamic_grid)
 endif()
 
 if(CATKIN_ENABLE_TESTING)

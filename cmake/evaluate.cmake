@@ -8,9 +8,7 @@ add_executable(evaluate tools/evaluate.cpp)
 target_link_libraries(evaluate grid_vision_fusion_ros)
 target_compile_options(evaluate PRIVATE ${GVF_WARNINGS})
 add_dependencies(evaluate ${PROJECT_NAME}_generate_messages_cpp)
-set_target_properties(evaluate PROPERTIES
-  RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION})
-install(TARGETS evaluate RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+gvf_rosrun_executable(evaluate)
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_kitti_ground_truth

@@ -12,6 +12,7 @@ if(benchmark_FOUND)
   add_executable(bench_grid_projection bench/bench_grid_projection.cpp)
   target_link_libraries(bench_grid_projection grid_vision_fusion_core benchmark::benchmark)
   target_compile_options(bench_grid_projection PRIVATE ${GVF_WARNINGS})
+  gvf_rosrun_executable(bench_grid_projection)
 endif()
 
 if(CATKIN_ENABLE_TESTING)

@@ -5,9 +5,7 @@ target_sources(grid_vision_fusion_ros PRIVATE src/ros/kitti_bag_writer.cpp)
 add_executable(kitti_to_bag tools/kitti_to_bag.cpp)
 target_link_libraries(kitti_to_bag grid_vision_fusion_ros)
 target_compile_options(kitti_to_bag PRIVATE ${GVF_WARNINGS})
-set_target_properties(kitti_to_bag PROPERTIES
-  RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION})
-install(TARGETS kitti_to_bag RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+gvf_rosrun_executable(kitti_to_bag)
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_kitti_bag_writer test/ros/test_kitti_bag_writer.cpp)

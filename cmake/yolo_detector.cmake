@@ -15,8 +15,7 @@ if(benchmark_FOUND)
   target_compile_options(bench_yolo PRIVATE ${GVF_WARNINGS})
   target_compile_definitions(bench_yolo PRIVATE
     GVF_YOLO_CFG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/models/yolo")
-  set_target_properties(bench_yolo PROPERTIES
-    RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION})
+  gvf_rosrun_executable(bench_yolo)
 endif()
 
 if(CATKIN_ENABLE_TESTING)

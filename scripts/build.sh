@@ -2,12 +2,14 @@
 # Installs the Debian packages that are missing and builds grid_vision_fusion (with its tests'
 # executables unless GVF_BUILD_TESTS=0) in a catkin workspace. Used by run_tests.sh and demo.sh.
 #
-# Usage: scripts/build.sh            (workspace in .workspace/ of the repository)
+# Usage: scripts/build.sh            (workspace in ~/.cache/grid_vision_fusion/workspace)
 #        GVF_WORKSPACE=/path scripts/build.sh
 set -eo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-workspace=${GVF_WORKSPACE:-$root/.workspace}
+# The workspace lives outside the repository: a workspace inside the package folder would make
+# a symbolic-link loop (src/grid_vision_fusion -> the repository) that rosrun's search follows.
+workspace=${GVF_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/grid_vision_fusion/workspace}
 jobs=${GVF_JOBS:-$(nproc)}
 # Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
 export PATH=/usr/bin:/bin:$PATH

@@ -3,12 +3,14 @@
 # a catkin workspace, runs every test (gtest, rostest, launch-file checks) and prints
 # `N passed, M failed` last. Exits non-zero when a build step or any test fails.
 #
-# Usage: scripts/run_tests.sh            (workspace in .workspace/ of the repository)
+# Usage: scripts/run_tests.sh            (workspace in ~/.cache/grid_vision_fusion/workspace)
 #        GVF_WORKSPACE=/path scripts/run_tests.sh
 set -o pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-workspace=${GVF_WORKSPACE:-$root/.workspace}
+# The workspace lives outside the repository: a workspace inside the package folder would make
+# a symbolic-link loop (src/grid_vision_fusion -> the repository) that rosrun's search follows.
+workspace=${GVF_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/grid_vision_fusion/workspace}
 jobs=${GVF_JOBS:-$(nproc)}
 export PATH=/usr/bin:/bin:$PATH
 
