@@ -163,7 +163,6 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
 
   // The chain: the four nodelets in this process, topics as perception.launch names them.
   nodelet::Loader loader(false);
-  loader.load("/", "nodelet_manager", {}, {});
   const nodelet::M_string remap;
   const nodelet::V_string args;
   for (const std::string name : {"dynamic_grid", "yolo_detector", "grid_projection", "fusion"})
@@ -335,5 +334,8 @@ int main(int argc, char** argv)
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_pipeline_equivalence");
   ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
+  const int result = RUN_ALL_TESTS();
+  const std::string& bag = grid_vision_fusion::drive().bag;  // the drive's temporary folder
+  std::filesystem::remove_all(std::filesystem::path(bag).parent_path());
+  return result;
 }
