@@ -7,7 +7,6 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
@@ -24,6 +23,7 @@
 #include "grid_vision_fusion/core/dynamic_grid_filter.h"
 #include "grid_vision_fusion/ros/grid_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
+#include "grid_vision_fusion/ros/stages.h"
 
 namespace grid_vision_fusion
 {
@@ -87,22 +87,11 @@ void DynamicGridNodelet::onInit()
   try
   {
     config = dynamicGridConfigFromParams(pnh);
-    readParam(pnh, "fixed_frame", fixed_frame_);
-    readParam(pnh, "lazy", lazy_);
-    readParam(pnh, "queue_size", queue_size_);
-    readParam(pnh, "expected_rate", expected_rate_);
-    if (fixed_frame_.empty())
-    {
-      throw std::invalid_argument("parameter ~fixed_frame must not be empty");
-    }
-    if (queue_size_ < 1)
-    {
-      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
-    }
-    if (!(expected_rate_ > 0.0))
-    {
-      throw std::invalid_argument("parameter ~expected_rate must be > 0 [Hz]");
-    }
+    const DynamicGridNodeOptions options = dynamicGridNodeOptionsFromParams(NodeHandleParamSource(pnh));
+    fixed_frame_ = options.fixed_frame;
+    lazy_ = options.lazy;
+    queue_size_ = options.queue_size;
+    expected_rate_ = options.expected_rate;
     filter_ = std::make_unique<DynamicGridFilter>(config);
   }
   catch (const std::exception& e)
@@ -228,8 +217,7 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   Eigen::Isometry3d world_from_sensor;
   try
   {
-    world_from_sensor = tf2::transformToEigen(
-        tf_buffer_->lookupTransform(fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp));
+    world_from_sensor = scanPose(*tf_buffer_, fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp);
   }
   catch (const tf2::TransformException& e)
   {

@@ -27,6 +27,7 @@
 #include "grid_vision_fusion/core/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
+#include "grid_vision_fusion/ros/stages.h"
 
 namespace grid_vision_fusion
 {
@@ -215,41 +216,33 @@ void FusionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
 void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
                              const ProjectedGrid::ConstPtr& grid_msg)
 {
-  const std::string grid_error = checkProjectedGrid(*grid_msg);
-  if (!grid_error.empty())
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f: topic %s: %s",
-                          grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(),
-                          grid_error.c_str());
-    return;
-  }
-  const std::vector<Detection> detections = detectionsFromMsg(*detections_msg);
-  const std::string input_error =
-      checkFusionInputs(detections, detections_msg->image_width, detections_msg->image_height,
-                        grid_msg->image_width, grid_msg->image_height);
-  if (!input_error.empty())
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f (%s + %s): %s",
-                          detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
-                          sub_grid_.getTopic().c_str(), input_error.c_str());
-    return;
-  }
-
   FusionConfig config;
   {
     std::lock_guard<std::mutex> lock(config_mutex_);
     config = config_;
   }
+  FusedPair pair;
+  try
+  {
+    pair = fusePair(*detections_msg, *grid_msg, config);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f (%s + %s): %s",
+                          detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
+                          sub_grid_.getTopic().c_str(), e.what());
+    return;
+  }
+  const std::vector<Detection>& detections = pair.detections;
+  const FusionResult& result = pair.result;
   const ProjectedPointsView points = viewOf(*grid_msg);
-  const FusionResult result = fuse(detections, points, config);
   if (result.invalid_points > 0)
   {
     NODELET_WARN_THROTTLE(kThrottleS, "fusion: %zu of %zu points of %s ignored (NaN/Inf values or bad state)",
                           result.invalid_points, points.size, sub_grid_.getTopic().c_str());
   }
 
-  DetectedObjectArray::Ptr objects =
-      objectsToMsg(detections_msg->header, grid_msg->grid_frame_id, detections, result);
+  const DetectedObjectArray::Ptr& objects = pair.objects;
   if (pub_markers_.getNumSubscribers() > 0)
   {
     pub_markers_.publish(objectsToMarkers(*objects));

@@ -24,6 +24,7 @@
 #include "grid_vision_fusion/core/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
+#include "grid_vision_fusion/ros/stages.h"
 
 namespace grid_vision_fusion
 {
@@ -293,10 +294,8 @@ bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detectio
       detections = replay_->detectionsOf(frame.frame_index, image.width, image.height);
       return true;
     }
-    const PixelFormat format = pixelFormatFromEncoding(image.encoding);
-    const cv_bridge::CvImageConstPtr view = cv_bridge::toCvShare(frame.image);
     detector_->setThresholds(score_threshold, nms_threshold);
-    detections = detector_->detect(view->image, format);
+    detections = detectInImage(*detector_, frame.image);
     return true;
   }
   catch (const std::exception& e)

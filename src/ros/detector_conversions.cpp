@@ -51,7 +51,7 @@ Detection2DArray::Ptr detectionsToMsg(const std_msgs::Header& image_header, std:
   return msg;
 }
 
-YoloDetectorConfig yoloDetectorConfigFromParams(const ros::NodeHandle& nh)
+YoloDetectorConfig yoloDetectorConfigFromParams(const ParamSource& nh)
 {
   YoloDetectorConfig config;
   readParam(nh, "model", config.model_path);
@@ -75,7 +75,7 @@ YoloDetectorConfig yoloDetectorConfigFromParams(const ros::NodeHandle& nh)
   }
   else
   {
-    throw std::invalid_argument("parameter " + nh.resolveName("onnx_layout") +
+    throw std::invalid_argument("parameter " + nh.describe("onnx_layout") +
                                 " must be \"pixels\" or \"opencv_region\", got \"" + onnx_layout + "\"");
   }
   readParam(nh, "score_threshold", config.score_threshold);
@@ -87,7 +87,7 @@ YoloDetectorConfig yoloDetectorConfigFromParams(const ros::NodeHandle& nh)
   return config;
 }
 
-DetectionReplayConfig detectionReplayConfigFromParams(const ros::NodeHandle& nh)
+DetectionReplayConfig detectionReplayConfigFromParams(const ParamSource& nh)
 {
   DetectionReplayConfig config;
   readParam(nh, "replay/directory", config.directory);
@@ -102,6 +102,16 @@ DetectionReplayConfig detectionReplayConfigFromParams(const ros::NodeHandle& nh)
   readParam(nh, "score_threshold", config.score_threshold);
   config.validate();
   return config;
+}
+
+YoloDetectorConfig yoloDetectorConfigFromParams(const ros::NodeHandle& nh)
+{
+  return yoloDetectorConfigFromParams(NodeHandleParamSource(nh));
+}
+
+DetectionReplayConfig detectionReplayConfigFromParams(const ros::NodeHandle& nh)
+{
+  return detectionReplayConfigFromParams(NodeHandleParamSource(nh));
 }
 
 }  // namespace grid_vision_fusion

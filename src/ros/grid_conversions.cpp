@@ -22,7 +22,7 @@ float packRgb(std::uint8_t r, std::uint8_t g, std::uint8_t b)
 }
 }  // namespace
 
-DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
+DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& nh)
 {
   DynamicGridConfig c;
   readParam(nh, "width", c.width);
@@ -50,7 +50,7 @@ DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
   readParam(nh, "seed", seed);
   if (seed < 0)
   {
-    throw std::invalid_argument("parameter " + nh.resolveName("seed") + " must be >= 0, got " +
+    throw std::invalid_argument("parameter " + nh.describe("seed") + " must be >= 0, got " +
                                 std::to_string(seed));
   }
   c.seed = static_cast<std::uint32_t>(seed);
@@ -73,6 +73,11 @@ DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
   readParam(nh, "range_sigma", m.range_sigma);
   c.validate();
   return c;
+}
+
+DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
+{
+  return dynamicGridConfigFromParams(NodeHandleParamSource(nh));
 }
 
 std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudView& view)

@@ -118,7 +118,7 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
   return msg;
 }
 
-GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh)
+GridProjectionConfig gridProjectionConfigFromParams(const ParamSource& nh)
 {
   GridProjectionConfig config;
   readParam(nh, "occupied_threshold", config.occupied_threshold);
@@ -137,6 +137,11 @@ GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh)
     throw std::invalid_argument("parameter ~" + std::string(e.what()));
   }
   return config;
+}
+
+GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh)
+{
+  return gridProjectionConfigFromParams(NodeHandleParamSource(nh));
 }
 
 }  // namespace grid_vision_fusion

@@ -12,6 +12,7 @@
 #include "grid_vision_fusion/core/detection_replay.h"
 #include "grid_vision_fusion/core/fusion.h"
 #include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -29,12 +30,14 @@ Detection2DArray::Ptr detectionsToMsg(const std_msgs::Header& image_header, std:
 /// ("pixels"|"opencv_region"), score_threshold, nms_threshold, dnn_backend, dnn_target and
 /// class_map (a dictionary). @throws std::invalid_argument on a wrong type or a value that
 /// YoloDetectorConfig::validate() rejects.
+YoloDetectorConfig yoloDetectorConfigFromParams(const ParamSource& params);
 YoloDetectorConfig yoloDetectorConfigFromParams(const ros::NodeHandle& nh);
 
 /// DetectionReplayConfig from the private parameters replay/directory, replay/file_pattern,
 /// replay/frame_index ("counter"|"seq"), replay/first_index, replay/class_map,
 /// replay/default_score, replay/missing_file_is_empty and score_threshold.
 /// @throws std::invalid_argument on a wrong type or a value that validate() rejects.
+DetectionReplayConfig detectionReplayConfigFromParams(const ParamSource& params);
 DetectionReplayConfig detectionReplayConfigFromParams(const ros::NodeHandle& nh);
 
 }  // namespace grid_vision_fusion

@@ -11,12 +11,14 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/core/dynamic_grid_filter.h"
+#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
 /// DynamicGridConfig from the private parameters (names as the Config fields, flat; the sensor
 /// model fields without prefix, see config/dynamic_grid.yaml). Unset keys keep the defaults.
 /// @throws std::invalid_argument on a wrong type or a value that validate() rejects.
+DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& params);
 DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh);
 
 /// Points `view` at the float32 x, y, z fields of `cloud` (no copy; the view is valid while

@@ -11,6 +11,7 @@
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/core/grid_projection.h"
+#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -37,6 +38,7 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
 /// GridProjectionConfig from the private parameters occupied_threshold, dynamic_ratio,
 /// min_depth, column_mode, column_height, column_points, predict_to_image_stamp.
 /// @throws std::invalid_argument on a wrong type or a value that validate() rejects.
+GridProjectionConfig gridProjectionConfigFromParams(const ParamSource& params);
 GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh);
 
 }  // namespace grid_vision_fusion

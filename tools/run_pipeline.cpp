@@ -1,0 +1,317 @@
+// run_pipeline: the four stages of grid_vision_fusion on a bag, off line (no roscore), as fast as
+// the machine allows, deterministically, with the nodelets' YAML configuration files.
+//
+//   rosrun grid_vision_fusion run_pipeline --bag IN.bag --output OUT.bag [options]
+#include <ros/package.h>
+#include <rosbag/bag.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/core/progress_bar.h"
+#include "grid_vision_fusion/ros/pipeline.h"
+
+namespace gvf = grid_vision_fusion;
+
+namespace
+{
+const char* const kUsage = R"(usage: run_pipeline --bag IN.bag --output OUT.bag [options]
+
+Runs the dynamic grid, the detector, the grid projection and the fusion on the messages of IN.bag
+in time order (no roscore; the same core code and YAML files as the nodelets) and writes the
+DetectedObjectArray of every image on /objects of OUT.bag, stamped like the image.
+
+options:
+  --bag FILE                input bag (kitti_to_bag or kitti2bag topics by default)
+  --output FILE             output bag (written as FILE.tmp, renamed at the end)
+  --config-dir DIR          folder of dynamic_grid.yaml, yolo_detector.yaml, grid_projection.yaml,
+                            fusion.yaml (default: the package's config/)
+  --grid-config FILE        overrides DIR/dynamic_grid.yaml
+  --detector-config FILE    overrides DIR/yolo_detector.yaml
+  --projection-config FILE  overrides DIR/grid_projection.yaml
+  --fusion-config FILE      overrides DIR/fusion.yaml
+  --backend NAME            opencv_dnn or replay (default: the detector config's backend)
+  --model FILE              Darknet .cfg or .onnx (default: models/yolo/yolov3.cfg of the package)
+  --weights FILE            Darknet .weights matching --model
+  --class-names FILE        class names (default: models/yolo/coco.names of the package)
+  --replay-directory DIR    label files for the replay backend (a drive's label_2)
+  --replay-file-pattern P   default %010d.txt (KITTI raw numbering, as kitti_replay.launch)
+  --replay-frame-index S    counter or seq (default seq: the frame index kitti_to_bag puts in
+                            header.seq, as kitti_replay.launch)
+  --topics LIST             input topic names, e.g. points=/velodyne_points,image=/cam/image_raw,
+                            camera_info=/cam/camera_info,tf=/tf,tf_static=/tf_static
+  --max-tf-wait S           bag seconds a message may wait for its tf (default 0.5)
+  --write-grids             also write /grid (DynamicGrid) and /projected_grid (ProjectedGrid)
+  --write-detections        also write /detections (Detection2DArray)
+  --benchmark               print the median time per frame of every stage, the total, the
+                            real-time factor and the memory (peak, and growth after frame 500)
+  -h, --help                this text
+)";
+
+struct Options
+{
+  std::string bag, output, config_dir;
+  std::string grid_config, detector_config, projection_config, fusion_config;
+  std::string backend, model, weights, class_names;
+  std::string replay_directory, replay_file_pattern = "%010d.txt", replay_frame_index = "seq";
+  gvf::PipelineTopics topics;
+  double max_tf_wait = 0.5;
+  bool write_grids = false;
+  bool write_detections = false;
+  bool benchmark = false;
+};
+
+void parseTopics(const std::string& list, gvf::PipelineTopics& topics)
+{
+  std::size_t begin = 0;
+  while (begin <= list.size())
+  {
+    const std::size_t end = std::min(list.find(',', begin), list.size());
+    const std::string item = list.substr(begin, end - begin);
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos || eq + 1 == item.size())
+    {
+      throw std::invalid_argument("--topics: \"" + item + "\" is not NAME=TOPIC");
+    }
+    const std::string name = item.substr(0, eq);
+    const std::string topic = item.substr(eq + 1);
+    if (name == "points")
+      topics.points = topic;
+    else if (name == "image")
+      topics.image = topic;
+    else if (name == "camera_info")
+      topics.camera_info = topic;
+    else if (name == "tf")
+      topics.tf = topic;
+    else if (name == "tf_static")
+      topics.tf_static = topic;
+    else
+      throw std::invalid_argument("--topics: unknown input \"" + name +
+                                  "\" (points, image, camera_info, tf, tf_static)");
+    begin = end + 1;
+  }
+}
+
+double medianOf(std::vector<double> values)
+{
+  if (values.empty())
+  {
+    return 0.0;
+  }
+  return gvf::median(values);
+}
+
+std::string packagePath(const std::string& what)
+{
+  const std::string package = ros::package::getPath("grid_vision_fusion");
+  if (package.empty())
+  {
+    throw std::runtime_error("cannot find the package grid_vision_fusion (source its setup.bash) for the default " +
+                             what + "; give it explicitly");
+  }
+  return package;
+}
+
+int run(const Options& o)
+{
+  const std::string config_dir = o.config_dir.empty() ? packagePath("--config-dir") + "/config" : o.config_dir;
+  gvf::YamlParamSource grid = gvf::YamlParamSource::fromFile(
+      o.grid_config.empty() ? config_dir + "/dynamic_grid.yaml" : o.grid_config);
+  gvf::YamlParamSource detector = gvf::YamlParamSource::fromFile(
+      o.detector_config.empty() ? config_dir + "/yolo_detector.yaml" : o.detector_config);
+  gvf::YamlParamSource projection = gvf::YamlParamSource::fromFile(
+      o.projection_config.empty() ? config_dir + "/grid_projection.yaml" : o.projection_config);
+  gvf::YamlParamSource fusion = gvf::YamlParamSource::fromFile(
+      o.fusion_config.empty() ? config_dir + "/fusion.yaml" : o.fusion_config);
+  // What the launch files set on top of the YAML files (yolo_detector.launch, kitti_replay.launch).
+  if (!o.backend.empty())
+  {
+    detector.set("backend", o.backend);
+  }
+  std::string backend = "opencv_dnn";
+  gvf::readParam(detector, "backend", backend);
+  if (backend == "opencv_dnn")
+  {
+    detector.set("model", o.model.empty() ? packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model);
+    detector.set("weights", o.weights);
+    detector.set("class_names",
+                 o.class_names.empty() ? packagePath("--class-names") + "/models/yolo/coco.names" : o.class_names);
+  }
+  detector.set("replay/directory", o.replay_directory);
+  detector.set("replay/file_pattern", o.replay_file_pattern);
+  detector.set("replay/frame_index", o.replay_frame_index);
+
+  gvf::PipelineConfig config = gvf::pipelineConfigFromParams(grid, detector, projection, fusion);
+  config.max_tf_wait = o.max_tf_wait;
+
+  const std::string tmp = o.output + ".tmp";
+  rosbag::Bag out(tmp, rosbag::bagmode::Write);
+  gvf::PipelineOutputs outputs;
+  outputs.objects = [&out](const gvf::DetectedObjectArray::ConstPtr& m) { out.write("/objects", m->header.stamp, m); };
+  if (o.write_grids)
+  {
+    outputs.grid = [&out](const gvf::DynamicGrid::ConstPtr& m) { out.write("/grid", m->header.stamp, m); };
+    outputs.projected_grid = [&out](const gvf::ProjectedGrid::ConstPtr& m)
+    { out.write("/projected_grid", m->header.stamp, m); };
+  }
+  if (o.write_detections)
+  {
+    outputs.detections = [&out](const gvf::Detection2DArray::ConstPtr& m)
+    { out.write("/detections", m->header.stamp, m); };
+  }
+  gvf::Pipeline pipeline(config, outputs);
+  for (const std::string& warning : pipeline.detectorWarnings())
+  {
+    std::cerr << "run_pipeline: detector: " << warning << "\n";
+  }
+  std::cerr << "run_pipeline: " << o.bag << " -> " << o.output << " (detector " << config.backend << ")\n";
+
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  std::unique_ptr<gvf::ProgressBar> bar;
+  const gvf::BagRunSummary summary =
+      gvf::runPipelineOnBag(pipeline, o.bag, o.topics,
+                            [&](std::size_t done, std::size_t total)
+                            {
+                              if (!bar)
+                              {
+                                bar = std::make_unique<gvf::ProgressBar>(std::cerr, total, "messages", tty);
+                              }
+                              bar->update(done);
+                            });
+  if (bar)
+  {
+    bar->finish();
+  }
+  out.close();
+  if (std::rename(tmp.c_str(), o.output.c_str()) != 0)
+  {
+    throw std::runtime_error("cannot rename " + tmp + " to " + o.output);
+  }
+
+  const gvf::PipelineStats& s = pipeline.stats();
+  std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, " << s.images
+            << " images, " << s.camera_infos << " camera_infos -> " << s.grids << " grids, " << s.projections
+            << " projected grids, " << s.objects << " object arrays on /objects\n";
+  if (s.grid_drops + s.detector_drops + s.projection_drops + s.fusion_drops + s.grid_resets > 0)
+  {
+    std::cerr << "run_pipeline: dropped: " << s.grid_drops << " scans, " << s.detector_drops << " images, "
+              << s.projection_drops << " camera_infos, " << s.fusion_drops << " fusion inputs; " << s.grid_resets
+              << " grid resets. Reasons:\n";
+    for (const std::string& w : s.warnings)
+    {
+      std::cerr << "  " << w << "\n";
+    }
+  }
+  if (o.benchmark)
+  {
+    const double grid = medianOf(s.grid_ms);
+    const double det = medianOf(s.detector_ms);
+    const double proj = medianOf(s.projection_ms);
+    const double fus = medianOf(s.fusion_ms);
+    const double frames = static_cast<double>(std::max<std::size_t>(summary.frames, 1));
+    const double wall_per_frame = 1e3 * summary.wall_s / frames;
+    std::printf("benchmark: %zu frames, bag %.1f s, wall %.1f s\n", summary.frames, summary.bag_duration_s,
+                summary.wall_s);
+    std::printf("  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
+                "fusion %.3f, sum %.2f\n",
+                grid, config.backend.c_str(), det, proj, fus, grid + det + proj + fus);
+    std::printf("  wall per frame (reading, all stages, writing): %.2f ms, %.1f frames/s, %.2fx real time\n",
+                wall_per_frame, 1e3 / wall_per_frame,
+                summary.wall_s > 0 ? summary.bag_duration_s / summary.wall_s : 0.0);
+    std::printf("  memory: peak %.1f MiB (getrusage)", gvf::peakResidentMemoryMiB());
+    if (summary.rss_mb.size() > 500)
+    {
+      const double at500 = summary.rss_mb[499];
+      const double end = summary.rss_mb.back();
+      std::printf(", resident at frame 500 %.1f MiB, at the end (frame %zu) %.1f MiB, growth %+.2f %%", at500,
+                  summary.rss_mb.size(), end, 100.0 * (end - at500) / at500);
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options o;
+  try
+  {
+    for (int i = 1; i < argc; ++i)
+    {
+      const std::string arg = argv[i];
+      if (arg == "-h" || arg == "--help")
+      {
+        std::cout << kUsage;
+        return 0;
+      }
+      if (arg == "--write-grids")
+      {
+        o.write_grids = true;
+        continue;
+      }
+      if (arg == "--write-detections")
+      {
+        o.write_detections = true;
+        continue;
+      }
+      if (arg == "--benchmark")
+      {
+        o.benchmark = true;
+        continue;
+      }
+      if (i + 1 >= argc)
+      {
+        std::cerr << "run_pipeline: option " << arg << " needs a value (or is unknown)\n\n" << kUsage;
+        return 1;
+      }
+      const std::string value = argv[++i];
+      if (arg == "--bag") o.bag = value;
+      else if (arg == "--output") o.output = value;
+      else if (arg == "--config-dir") o.config_dir = value;
+      else if (arg == "--grid-config") o.grid_config = value;
+      else if (arg == "--detector-config") o.detector_config = value;
+      else if (arg == "--projection-config") o.projection_config = value;
+      else if (arg == "--fusion-config") o.fusion_config = value;
+      else if (arg == "--backend") o.backend = value;
+      else if (arg == "--model") o.model = value;
+      else if (arg == "--weights") o.weights = value;
+      else if (arg == "--class-names") o.class_names = value;
+      else if (arg == "--replay-directory") o.replay_directory = value;
+      else if (arg == "--replay-file-pattern") o.replay_file_pattern = value;
+      else if (arg == "--replay-frame-index") o.replay_frame_index = value;
+      else if (arg == "--topics") parseTopics(value, o.topics);
+      else if (arg == "--max-tf-wait")
+      {
+        std::size_t used = 0;
+        o.max_tf_wait = std::stod(value, &used);
+        if (used != value.size() || !(o.max_tf_wait >= 0.0))
+        {
+          throw std::invalid_argument("--max-tf-wait needs seconds >= 0, got \"" + value + "\"");
+        }
+      }
+      else
+      {
+        std::cerr << "run_pipeline: unknown option " << arg << "\n\n" << kUsage;
+        return 1;
+      }
+    }
+    if (o.bag.empty() || o.output.empty())
+    {
+      std::cerr << "run_pipeline: --bag and --output are required\n\n" << kUsage;
+      return 1;
+    }
+    return run(o);
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "run_pipeline: " << e.what() << "\n";
+    return 1;
+  }
+}
