@@ -407,7 +407,8 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
     const Eigen::Isometry3d world_from_rect = world_from_velo * velo_from_rect;
     const Eigen::Isometry3d velo_from_world = world_from_velo.inverse();
     const Eigen::Isometry3d rect_from_world = world_from_rect.inverse();
-    const SceneSnapshot scene(scenario.actors, scenario.scenery, t);
+    SceneSnapshot scene(scenario.actors, scenario.scenery, t);
+    scene.cullBeyond(world_from_velo.translation().head<2>(), std::max(scenario.lidar.max_range, camera.far_m));
 
     // Lidar scan.
     const std::vector<LidarPoint> scan = simulateLidarScan(scene, world_from_velo, scenario.lidar, rng);

@@ -273,6 +273,17 @@ SceneSnapshot::SceneSnapshot(const std::vector<Actor>& actors, const std::vector
     scenery_boxes_.push_back(item.box);
     bound_radius_.push_back(boundingSphere(item.box).radius);
   }
+  culled_.assign(bound_radius_.size(), false);
+}
+
+void SceneSnapshot::cullBeyond(const Eigen::Vector2d& centre, double radius)
+{
+  const std::size_t actors = actor_boxes_.size();
+  for (std::size_t i = 0; i < culled_.size(); ++i)
+  {
+    const GroundBox& box = i < actors ? actor_boxes_[i] : scenery_boxes_[i - actors];
+    culled_[i] = (Eigen::Vector2d(box.pose.x, box.pose.y) - centre).norm() - bound_radius_[i] > radius;
+  }
 }
 
 RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double min_range,
@@ -292,7 +303,7 @@ RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   const std::size_t actors = actor_boxes_.size();
   for (std::size_t i = 0; i < actors + scenery_boxes_.size(); ++i)
   {
-    if (i < actors && !actor_active_[i])
+    if (culled_[i] || (i < actors && !actor_active_[i]))
     {
       continue;
     }
@@ -317,7 +328,7 @@ void SceneSnapshot::actorsAlong(const Eigen::Vector3d& origin, const Eigen::Vect
 {
   for (std::size_t i = 0; i < actor_boxes_.size(); ++i)
   {
-    if (actor_active_[i] && mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range, max_range) &&
+    if (actor_active_[i] && !culled_[i] && mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range, max_range) &&
         intersectBox(actor_boxes_[i], origin, direction, min_range).range <= max_range)
     {
       actors.push_back(static_cast<int>(i));

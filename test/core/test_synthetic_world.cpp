@@ -98,6 +98,14 @@ TEST(SceneSnapshot, NearestHitAndHiddenActors)
   EXPECT_NEAR(ground.range, 2.0, 1e-12);
   // Range limit.
   EXPECT_FALSE(scene.cast(origin, Eigen::Vector3d::UnitX(), 0.1, 7.0).hit());
+  // Culling: boxes entirely beyond 15 m of the origin are left out (the far car at 20 m and the
+  // wall at 40 m); the near car at 10 m stays.
+  SceneSnapshot culled = scene;
+  culled.cullBeyond(Eigen::Vector2d::Zero(), 15.0);
+  EXPECT_EQ(culled.cast(Eigen::Vector3d(0.0, 0.0, 3.0), Eigen::Vector3d::UnitX(), 0.1, 100.0).object, RayHit::kNothing);
+  along.clear();
+  culled.actorsAlong(origin, Eigen::Vector3d::UnitX(), 0.1, 100.0, along);
+  EXPECT_EQ(along, (std::vector<int>{0}));
 }
 
 TEST(Lidar, Hdl64LayoutAndGroundReturns)
