@@ -14,6 +14,7 @@ namespace
 {
 constexpr int kNormalTableBits = 16;
 constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
+constexpr int kBucket = 8;  // vacated cells are bucketed in squares of kBucket x kBucket cells
 
 // Standard normal quantiles at the centres of 2^16 equal-probability slices: a 16-bit random
 // index gives a normal sample (tails cut at +-4.3 sigma), a deterministic and fast sampler.
@@ -135,6 +136,10 @@ void DynamicGridConfig::validate() const
   require(std::isfinite(acceleration_sigma) && acceleration_sigma >= 0.0, "acceleration_sigma",
           "must be >= 0 [m/s^2]");
   require(std::isfinite(max_speed) && max_speed > 0.0, "max_speed", "must be > 0 [m/s]");
+  require(std::isfinite(birth_motion_speed) && birth_motion_speed >= 0.0, "birth_motion_speed",
+          "must be >= 0 [m/s]");
+  require(std::isfinite(birth_motion_fraction) && birth_motion_fraction >= 0.0 && birth_motion_fraction <= 1.0,
+          "birth_motion_fraction", "must be in [0, 1]");
   require(dynamic_threshold > 0.0 && dynamic_threshold <= 1.0, "dynamic_threshold", "must be in (0, 1]");
   require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed",
           "must be >= 0 [m/s]");
@@ -175,6 +180,11 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   {
     v->resize(births);
   }
+  occupied_mask_.assign(cells, 0);
+  previous_mask_.assign(cells, 0);
+  bucket_cols_ = (geometry_.width + kBucket - 1) / kBucket;
+  bucket_rows_ = (geometry_.height + kBucket - 1) / kBucket;
+  bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1, 0);
   normalTable();
   reset();
 }
@@ -186,6 +196,10 @@ void DynamicGridFilter::reset()
   std::fill(particles_.weight.begin(), particles_.weight.end(), 0.0F);
   std::fill(particles_.cell.begin(), particles_.cell.end(), -1);
   occupancy_.assign(geometry_.cellCount(), 0.5F);
+  std::fill(occupied_mask_.begin(), occupied_mask_.end(), 0);
+  std::fill(previous_mask_.begin(), previous_mask_.end(), 0);
+  vacated_.clear();
+  have_previous_ = false;
   rng_.seed(config_.seed);
   normal_has_spare_ = false;
   initialised_ = false;
@@ -306,6 +320,22 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var);
     geometry_.origin_col = col;
     geometry_.origin_row = row;
+    // The occupied mask of the last scan, moved like the cells: the previous scan's mask.
+    const int w = geometry_.width;
+    const int h = geometry_.height;
+    for (int r = 0; r < h; ++r)
+    {
+      const std::int64_t src_r = r + cycle.shift_rows;
+      for (int c = 0; c < w; ++c)
+      {
+        const std::int64_t src_c = c + cycle.shift_cols;
+        previous_mask_[geometry_.index(r, c)] =
+            (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+                ? occupied_mask_[static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                 static_cast<std::size_t>(src_c)]
+                : 0;
+      }
+    }
     const float sx = static_cast<float>(static_cast<double>(cycle.shift_cols) * geometry_.resolution);
     const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
     if (sx != 0.0F || sy != 0.0F)
@@ -332,6 +362,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     occupancy_.assign(geometry_.cellCount(), 0.5F);
   }
   const Clock::time_point t_model_end = Clock::now();
+  findMotionCells(first);
 
   // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
   // scan has no motion; its transitions use one transition_period so that it counts.
@@ -359,22 +390,32 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   const std::size_t n = p.size();
 
   // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
+  const float inv_information =
+      1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5, 0.5 - config_.sensor_model.p_free));
   for (std::size_t c = 0; c < cells; ++c)
   {
     const float s = cells_.p_static[c];
     const float e = cells_.p_free[c];
     const float u = cells_.p_unknown[c];
-    const float s_pred = s * rs.stay + e * re.to[0] + u * ru.to[0] + from_dynamic_static_[c];
+    const float po = occupancy_[c];
+    // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
+    // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
+    // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
+    // instead of drifting to a stale static/free prior while it is shadowed).
+    const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
+    const float u_s = lambda * ru.to[0];
+    const float u_d = lambda * ru.to[1];
+    const float u_e = lambda * ru.to[2];
+    const float s_pred = s * rs.stay + e * re.to[0] + u * u_s + from_dynamic_static_[c];
     const float d_persistent = pred_dynamic_[c];
-    const float d_newborn = s * rs.to[0] + e * re.to[1] + u * ru.to[1];
-    const float e_pred = e * re.stay + u * ru.to[2];
-    float u_pred = s * rs.to[1] + e * re.to[2] + u * ru.stay + from_dynamic_unknown_[c];
+    const float d_newborn = s * rs.to[0] + e * re.to[1] + u * u_d;
+    const float e_pred = e * re.stay + u * u_e;
+    float u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
     const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
     if (total < 1.0F)
     {
       u_pred += 1.0F - total;  // mass that moved out of the cell with its particles: unknown now
     }
-    const float po = occupancy_[c];
     const float ls = po * s_pred;
     const float ldp = po * d_persistent;
     const float ldn = po * d_newborn;
@@ -438,14 +479,114 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   }
 
   // 8-9. Birth in proportion to the newborn mass, resampling.
-  cycle.particles_in_use = birthAndResample(cycle.particles_born);
+  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
   const Clock::time_point t_end = Clock::now();
   cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
   cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
   return cycle;
 }
 
-std::size_t DynamicGridFilter::birthAndResample(std::size_t& born)
+void DynamicGridFilter::findMotionCells(bool first)
+{
+  // Appearing cell: measured occupied now (p_o > 1/2), not in the previous scan. Vacated cell:
+  // measured occupied in the previous scan, measured free now (p_o < 1/2): what occupied it has
+  // moved (a static object does not leave a cell that stays in view). Vacated cells are bucketed
+  // (counting sort) for the search of motionVelocity().
+  const std::size_t cells = geometry_.cellCount();
+  const bool use = !first && have_previous_ && config_.birth_motion_speed > 0.0 &&
+                   config_.birth_motion_fraction > 0.0;
+  vacated_.clear();
+  if (use)
+  {
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      if (previous_mask_[c] && occupancy_[c] < 0.5F)
+      {
+        vacated_.push_back(static_cast<std::int32_t>(c));
+      }
+    }
+  }
+  std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
+  bucket_cells_.resize(vacated_.size());
+  const auto w = static_cast<std::size_t>(geometry_.width);
+  auto bucketOf = [&](std::int32_t c)
+  {
+    const auto uc = static_cast<std::size_t>(c);
+    return (uc / w / kBucket) * static_cast<std::size_t>(bucket_cols_) + (uc % w) / kBucket;
+  };
+  for (std::int32_t c : vacated_)
+  {
+    ++bucket_start_[bucketOf(c) + 1];
+  }
+  for (std::size_t b = 1; b < bucket_start_.size(); ++b)
+  {
+    bucket_start_[b] += bucket_start_[b - 1];
+  }
+  candidates_.assign(bucket_start_.begin(), bucket_start_.end() - 1);  // fill positions
+  for (std::int32_t c : vacated_)
+  {
+    bucket_cells_[static_cast<std::size_t>(candidates_[bucketOf(c)]++)] = c;
+  }
+  candidates_.clear();
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    occupied_mask_[c] = occupancy_[c] > 0.5F ? 1 : 0;
+  }
+  have_previous_ = true;
+}
+
+bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy)
+{
+  if (vacated_.empty() || dt <= 0.0F)
+  {
+    return false;
+  }
+  const float res = static_cast<float>(geometry_.resolution);
+  const float radius = static_cast<float>(config_.birth_motion_speed) * dt;
+  const int w = geometry_.width;
+  const int row = static_cast<int>(cell / static_cast<std::size_t>(w));
+  const int col = static_cast<int>(cell % static_cast<std::size_t>(w));
+  const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
+  const float r2 = radius * radius;
+  candidates_.clear();
+  const int b_r0 = std::max(0, (row - reach) / kBucket);
+  const int b_r1 = std::min(bucket_rows_ - 1, (row + reach) / kBucket);
+  const int b_c0 = std::max(0, (col - reach) / kBucket);
+  const int b_c1 = std::min(bucket_cols_ - 1, (col + reach) / kBucket);
+  for (int br = b_r0; br <= b_r1; ++br)
+  {
+    for (int bc = b_c0; bc <= b_c1; ++bc)
+    {
+      const std::size_t b = static_cast<std::size_t>(br) * static_cast<std::size_t>(bucket_cols_) +
+                            static_cast<std::size_t>(bc);
+      for (std::int32_t k = bucket_start_[b]; k < bucket_start_[b + 1]; ++k)
+      {
+        const std::int32_t v = bucket_cells_[static_cast<std::size_t>(k)];
+        const float dr = static_cast<float>(v / w - row) * res;
+        const float dc = static_cast<float>(v % w - col) * res;
+        if (dr * dr + dc * dc <= r2)
+        {
+          candidates_.push_back(v);
+        }
+      }
+    }
+  }
+  if (candidates_.empty())
+  {
+    return false;
+  }
+  const auto pick = std::min(static_cast<std::size_t>(uniform() * static_cast<float>(candidates_.size())),
+                             candidates_.size() - 1);
+  const std::int32_t v = candidates_[pick];
+  // The particle came from a uniform point of the vacated cell to its own position within dt.
+  const float sx = (static_cast<float>(v % w) + uniform()) * res;
+  const float sy = (static_cast<float>(v / w) + uniform()) * res;
+  vx = (x - sx) / dt;
+  vy = (y - sy) / dt;
+  return true;
+}
+
+std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
 {
   // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
   // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
@@ -486,12 +627,18 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born)
       const int col = static_cast<int>(c % static_cast<std::size_t>(geometry_.width));
       const float res = static_cast<float>(geometry_.resolution);
       const float sb = static_cast<float>(config_.birth_velocity_sigma);
+      const bool appearing = !vacated_.empty() && !previous_mask_[c];
+      const auto fraction = static_cast<float>(config_.birth_motion_fraction);
       for (std::size_t k = first; k < born; ++k)
       {
         birth_x_[k] = (static_cast<float>(col) + uniform()) * res;
         birth_y_[k] = (static_cast<float>(row) + uniform()) * res;
-        birth_vx_[k] = sb * normal();
-        birth_vy_[k] = sb * normal();
+        if (!(appearing && uniform() < fraction &&
+              motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k])))
+        {
+          birth_vx_[k] = sb * normal();
+          birth_vy_[k] = sb * normal();
+        }
         birth_w_[k] = w;
       }
     }

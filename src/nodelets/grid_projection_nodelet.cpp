@@ -1,5 +1,7 @@
 // grid_vision_fusion/grid_projection: DynamicGrid + CameraInfo (+ tf) -> ProjectedGrid, one per
-// camera_info, stamped like the image.
+// camera_info, stamped like the image. Each camera_info waits (without blocking) in a
+// tf2_ros::MessageFilter until the tf of its stamp is there: a camera_info that arrives before
+// the /tf of the same stamp is projected as soon as that tf comes in.
 #include <boost/thread/lock_guard.hpp>
 #include <boost/thread/mutex.hpp>
 #include <cv_bridge/cv_bridge.h>
@@ -12,6 +14,7 @@
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
@@ -36,10 +39,16 @@ constexpr double kThrottleS = 5.0;
 
 class GridProjectionNodelet : public nodelet::Nodelet
 {
+  using TfFilter = tf2_ros::MessageFilter<sensor_msgs::CameraInfo>;
+
   void onInit() override;
   void connectCb();
   void gridCb(const DynamicGrid::ConstPtr& grid_msg);
+  /// camera_info as received: handed to the tf filter once a grid (hence its frame) is known.
+  void cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
+  /// camera_info whose tf (camera <- grid frame, ground_frame) is available at its stamp.
   void cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
+  void tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, tf2_ros::FilterFailureReason reason);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
   /// z of the ground plane in the grid frame at `stamp`; false (after a throttled warning) when
   /// the tf grid frame ← ground_frame is missing.
@@ -53,10 +62,13 @@ class GridProjectionNodelet : public nodelet::Nodelet
   double ground_height_ = -1.73;
   double max_grid_age_ = 0.5;
   int image_cache_size_ = 5;
+  int queue_size_ = 5;
   bool lazy_ = true;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<TfFilter> tf_filter_;
+  std::string tf_target_frame_;  // grid frame the tf filter waits for (guarded by grid_mutex_)
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   ros::Subscriber sub_grid_;
@@ -86,6 +98,11 @@ void GridProjectionNodelet::onInit()
     readParam(pnh, "max_grid_age", max_grid_age_);
     readParam(pnh, "image_cache_size", image_cache_size_);
     readParam(pnh, "lazy", lazy_);
+    readParam(pnh, "queue_size", queue_size_);
+    if (queue_size_ < 1)
+    {
+      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
+    }
     if (!std::isfinite(ground_height_))
     {
       throw std::invalid_argument("parameter ~ground_height must be finite");
@@ -109,6 +126,13 @@ void GridProjectionNodelet::onInit()
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+  // The target frames (grid frame, ground_frame) are set when the first grid arrives; no
+  // camera_info is handed to the filter before that.
+  tf_filter_ = std::make_unique<TfFilter>(*tf_buffer_, "", static_cast<std::uint32_t>(queue_size_), nh);
+  tf_filter_->setTargetFrames({});
+  tf_filter_->registerCallback(boost::bind(&GridProjectionNodelet::cameraInfoCb, this, boost::placeholders::_1));
+  tf_filter_->registerFailureCallback(
+      boost::bind(&GridProjectionNodelet::tfFailureCb, this, boost::placeholders::_1, boost::placeholders::_2));
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
@@ -120,7 +144,8 @@ void GridProjectionNodelet::onInit()
   {
     // connectCb takes the lock itself; subscribe without it here.
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", 5, &GridProjectionNodelet::cameraInfoCb, this);
+    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(queue_size_),
+                             &GridProjectionNodelet::cameraInfoInCb, this);
     sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
@@ -146,13 +171,15 @@ void GridProjectionNodelet::connectCb()
   {
     sub_grid_.shutdown();
     sub_info_.shutdown();
+    tf_filter_->clear();
     std::lock_guard<std::mutex> grid_lock(grid_mutex_);
     grid_.reset();
   }
   else if (!sub_grid_)
   {
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", 5, &GridProjectionNodelet::cameraInfoCb, this);
+    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(queue_size_),
+                             &GridProjectionNodelet::cameraInfoInCb, this);
   }
   if (!overlay_wanted)
   {
@@ -185,6 +212,46 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
                           grid_->header.stamp.toSec());
   }
   grid_ = grid_msg;
+  if (grid_msg->header.frame_id != tf_target_frame_)
+  {
+    tf_target_frame_ = grid_msg->header.frame_id;
+    std::vector<std::string> targets{tf_target_frame_};
+    if (!ground_frame_.empty() && ground_frame_ != tf_target_frame_)
+    {
+      targets.push_back(ground_frame_);
+    }
+    tf_filter_->setTargetFrames(targets);
+  }
+}
+
+void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
+{
+  {
+    std::lock_guard<std::mutex> lock(grid_mutex_);
+    if (!grid_)
+    {
+      NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
+                            info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
+      return;
+    }
+  }
+  // Waits in the filter's queue (at most ~queue_size messages) until the tf of its stamp is
+  // there; cameraInfoCb or tfFailureCb follows.
+  tf_filter_->add(info_msg);
+}
+
+void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg,
+                                        tf2_ros::FilterFailureReason reason)
+{
+  const char* why =
+      reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the camera_info has an empty frame_id"
+      : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "its stamp is older than the tf buffer"
+                                                              : "its tf did not arrive within ~queue_size camera_infos";
+  NODELET_WARN_THROTTLE(kThrottleS,
+                        "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
+                        "(%s), nothing published",
+                        sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(),
+                        info_msg->header.frame_id.c_str(), tf_filter_->getTargetFramesString().c_str(), why);
 }
 
 bool GridProjectionNodelet::groundZ(const std::string& grid_frame, const ros::Time& stamp, double& ground_z)

@@ -198,6 +198,89 @@ TEST(DynamicGridFilter, MovingBoxBecomesDynamicWithItsVelocity)
   EXPECT_LT(std::fabs(std::atan2(vy, vx)), 10.0 * M_PI / 180.0) << "vx " << vx << " vy " << vy;
 }
 
+// Mean velocity (weighted by P(D)) and counts over the observed cells of `box`.
+struct BoxMotion
+{
+  std::size_t cells = 0;
+  std::size_t dynamic_wins = 0;  // P(D) > P(S): what grid_projection reports as DYNAMIC
+  std::size_t classified_dynamic = 0;
+  double vx = 0.0;
+  double vy = 0.0;
+};
+
+BoxMotion boxMotion(const DynamicGridFilter& filter, const Box& box)
+{
+  BoxMotion m;
+  const CellStates& s = filter.cells();
+  double w = 0.0;
+  for (std::size_t i : observedBoxCells(filter, box))
+  {
+    ++m.cells;
+    m.dynamic_wins += s.p_dynamic[i] > s.p_static[i] ? 1 : 0;
+    m.classified_dynamic += filter.classify(i) == CellClass::kDynamic ? 1 : 0;
+    w += s.p_dynamic[i];
+    m.vx += s.p_dynamic[i] * s.vx[i];
+    m.vy += s.p_dynamic[i] * s.vy[i];
+  }
+  if (w > 0.0)
+  {
+    m.vx /= w;
+    m.vy /= w;
+  }
+  return m;
+}
+
+TEST(DynamicGridFilter, BoxDrivingAwayIntoItsShadowBecomesDynamic)
+{
+  // The hard case of the synthetic drive's car ahead: a car driving AWAY from the sensor at
+  // 10 m/s along +x. Its rear face moves into cells that were shadowed (unknown) by the car
+  // itself, so nothing but the particles carried from the cells it left tells it from a static
+  // object uncovered there. Within 20 scans most of its cells must be dynamic at 10 +- 1 m/s.
+  DynamicGridFilter filter(testConfig());
+  BoxWorldLidar lidar;
+  const auto pose = sensorPose(0.0, 0.0, kSensorHeight);
+  const double speed = 10.0;
+  Box box;
+  box.y = 0.0;
+  box.height = 1.5;  // below the sensor: its roof is seen too (long along the motion)
+  for (int k = 0; k < 20; ++k)
+  {
+    box.x = 10.0 + speed * k * kPeriod;
+    step(filter, lidar, pose, {box}, k * kPeriod);
+  }
+  const BoxMotion m = boxMotion(filter, box);
+  ASSERT_GT(m.cells, 5U);
+  EXPECT_GT(m.dynamic_wins * 10, m.cells * 7) << m.dynamic_wins << " of " << m.cells << " cells P(D) > P(S)";
+  EXPECT_NEAR(m.vx, speed, 1.0) << "vy " << m.vy;
+  EXPECT_NEAR(m.vy, 0.0, 1.0);
+}
+
+TEST(DynamicGridFilter, BoxCrossingInFrontBecomesDynamic)
+{
+  // A car crossing 15 m ahead from right to left at 8 m/s, seen from the side (its long side
+  // moves along itself: only its ends show the motion cell by cell).
+  DynamicGridFilter filter(testConfig());
+  BoxWorldLidar lidar;
+  const auto pose = sensorPose(0.0, 0.0, kSensorHeight);
+  const double speed = 8.0;
+  Box box;
+  box.x = 15.0;
+  box.yaw = M_PI / 2;
+  for (int k = 0; k < 20; ++k)
+  {
+    box.y = -8.0 + speed * k * kPeriod;
+    step(filter, lidar, pose, {box}, k * kPeriod);
+  }
+  Box footprint = box;  // observedBoxCells takes an axis-aligned footprint
+  footprint.length = box.width;
+  footprint.width = box.length;
+  const BoxMotion m = boxMotion(filter, footprint);
+  ASSERT_GT(m.cells, 5U);
+  EXPECT_GT(m.dynamic_wins * 10, m.cells * 7) << m.dynamic_wins << " of " << m.cells << " cells P(D) > P(S)";
+  EXPECT_NEAR(m.vy, speed, 1.5) << "vx " << m.vx;
+  EXPECT_NEAR(m.vx, 0.0, 1.5);
+}
+
 TEST(DynamicGridFilter, ClassificationThresholdsOnlyChangeReporting)
 {
   DynamicGridFilter filter(testConfig());
@@ -263,6 +346,8 @@ TEST(DynamicGridFilter, FreeSpaceBecomesFreeAndTheShadowStaysUnknown)
     {
       const std::size_t i = cellAt(filter, x, y);
       EXPECT_GT(s.p_unknown[i], 0.5F) << "x " << x << " y " << y;
+      // No observation, no drift to a static (or free) prior: the shadow stays unknown.
+      EXPECT_LT(s.p_static[i] + s.p_dynamic[i] + s.p_free[i], 0.02F) << "x " << x << " y " << y;
       EXPECT_EQ(filter.classify(i), CellClass::kUnknown) << "x " << x << " y " << y;
     }
   }
@@ -305,7 +390,11 @@ TEST(DynamicGridFilter, EgoMotionPastParkedBoxesKeepsThemStatic)
   }
   ASSERT_GT(occupied, 50U);
   EXPECT_LE(dynamic * 50, occupied) << dynamic << " of " << occupied << " parked cells dynamic";
-  EXPECT_GE(static_wins * 10, occupied * 9) << static_wins << " of " << occupied;
+  // P(S) > P(D) in 85 % of the cells (was 90 %): a parked box uncovered by the ego motion starts
+  // with S = D (eps_unknown_to_static = eps_unknown_to_dynamic, one observation resolving most
+  // of U), and its dynamic mass only fades as its particles leave; the reported class above is
+  // static for >= 98 % of the cells.
+  EXPECT_GE(static_wins * 100, occupied * 85) << static_wins << " of " << occupied;
 }
 
 TEST(DynamicGridFilter, TimeJumpBackwardsAndLongGapsReset)
@@ -320,7 +409,8 @@ TEST(DynamicGridFilter, TimeJumpBackwardsAndLongGapsReset)
     EXPECT_FALSE(step(filter, lidar, pose, {box}, 100.0 + k * kPeriod).reset);
   }
   const std::size_t free_cell = cellAt(filter, 8.0, 0.5);
-  EXPECT_GT(filter.cells().p_free[free_cell], 0.2F);
+  const float free_after_five = filter.cells().p_free[free_cell];
+  EXPECT_GT(free_after_five, 0.2F);
   // A bag loop: back to t = 100.
   DynamicGridCycle cycle = step(filter, lidar, pose, {box}, 100.0);
   EXPECT_TRUE(cycle.reset);
@@ -329,7 +419,7 @@ TEST(DynamicGridFilter, TimeJumpBackwardsAndLongGapsReset)
   DynamicGridFilter fresh(testConfig());
   step(fresh, lidar, pose, {box}, 100.0);
   EXPECT_FLOAT_EQ(filter.cells().p_free[free_cell], fresh.cells().p_free[free_cell]);
-  EXPECT_LT(filter.cells().p_free[free_cell], 0.2F);
+  EXPECT_LT(filter.cells().p_free[free_cell], free_after_five);  // one scan of evidence, not five
   // A gap of 1.5 s > max_time_gap.
   cycle = step(filter, lidar, pose, {box}, 101.5);
   EXPECT_TRUE(cycle.reset);
@@ -355,12 +445,15 @@ TEST(DynamicGridFilter, EmptyScanIsAPredictionStep)
   expectValidProbabilities(filter);
   EXPECT_FALSE(cycle.reset);
   EXPECT_EQ(cycle.sensor.points, 0U);
-  // Only the transitions act (p_o = 1/2 everywhere leaves the prediction as it is):
-  // P(E) = P(E) (1 - eps_E->S - eps_E->D - eps_E->U) + P(U) eps_U->E over one period.
+  // Only the transitions act (p_o = 1/2 everywhere leaves the prediction as it is), and U -> E
+  // needs an observation (lambda = 0 without one): P(E) = P(E) (1 - eps_E->S - eps_E->D - eps_E->U)
+  // over one period, P(U) only gains (the unknown mass of an unobserved cell stays unknown).
+  // (Before the U -> X transitions were tied to observations this expected
+  // + P(U) eps_U->E: free evidence growing in a cell nobody looks at, which was wrong.)
   const DynamicGridConfig& c = filter.config();
   const double leave = c.eps_free_to_static + c.eps_free_to_dynamic + c.eps_free_to_unknown;
-  EXPECT_NEAR(filter.cells().p_free[i], free_before * (1.0 - leave) + unknown_before * c.eps_unknown_to_free,
-              1e-4);
+  EXPECT_NEAR(filter.cells().p_free[i], free_before * (1.0 - leave), 1e-4);
+  EXPECT_GE(filter.cells().p_unknown[i], unknown_before);
 }
 
 TEST(DynamicGridFilter, DeterministicForASeed)

@@ -9,6 +9,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <array>
 #include <cmath>
@@ -260,6 +261,63 @@ TEST_F(GridProjectionNodeletTest, UnusableInputGivesNoOutputAndNoCrash)
   ASSERT_FALSE(received_.empty());
   EXPECT_EQ(received_.front()->header.stamp, good);
   EXPECT_EQ(received_.front()->u.size(), 3U);
+}
+
+TEST_F(GridProjectionNodeletTest, CameraInfoBeforeItsTfWaitsAndIsProjected)
+{
+  // The camera_info of a moving camera frame arrives before the /tf of its stamp (as in a bag
+  // replay where camera_info precedes /tf): the nodelet must keep it until the tf comes, then
+  // project it, instead of dropping it with "extrapolation into the future".
+  subscribeProjected();
+  const ros::Time stamp(1317000300, 0);
+  const auto grid = makeGrid(stamp - ros::Duration(0.05));
+  // Make sure the grid is there first (a camera_info before any grid is refused).
+  ASSERT_TRUE(projectUntilReceived(grid, makeInfo(stamp - ros::Duration(0.03))));
+  const auto late = [this, stamp] {
+    std::vector<ProjectedGrid::ConstPtr> out;
+    for (const auto& msg : received_)
+    {
+      if (msg->header.stamp == stamp)
+      {
+        out.push_back(msg);
+      }
+    }
+    return out;
+  };
+  const auto info = makeInfo(stamp, "camera_late");
+  pub_info_.publish(info);
+  ros::WallDuration(0.5).sleep();
+  ros::spinOnce();
+  EXPECT_TRUE(late().empty()) << "projected before the tf of its stamp existed";
+  // Now the tf world -> camera_late (the test camera pose) at and around the stamp.
+  tf2_ros::TransformBroadcaster broadcaster;
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  for (double dt : {-0.1, 0.0, 0.1})
+  {
+    geometry_msgs::TransformStamped camera;
+    camera.header.stamp = stamp + ros::Duration(dt);
+    camera.header.frame_id = "world";
+    camera.child_frame_id = "camera_late";
+    camera.transform.translation.z = kCameraHeight;
+    camera.transform.rotation.x = -0.5;
+    camera.transform.rotation.y = 0.5;
+    camera.transform.rotation.z = -0.5;
+    camera.transform.rotation.w = 0.5;
+    transforms.push_back(camera);
+  }
+  ASSERT_TRUE(waitFor([&] { return !late().empty(); }, 10.0, [&] {
+    broadcaster.sendTransform(transforms);
+    ros::WallDuration(0.05).sleep();
+  })) << "the camera_info waiting for its tf was never projected";
+  ros::WallDuration(0.3).sleep();
+  ros::spinOnce();
+  const auto projected = late();
+  ASSERT_EQ(projected.size(), 1U) << "the camera_info must be projected exactly once";
+  EXPECT_EQ(projected.front()->header.frame_id, "camera_late");
+  ASSERT_EQ(projected.front()->u.size(), 3U);
+  const auto a = expectedPixel(10.1, 0.1);
+  EXPECT_NEAR(projected.front()->u[1], a[0], kPixelTolerance);
+  EXPECT_NEAR(projected.front()->v[1], a[1], kPixelTolerance);
 }
 
 TEST_F(GridProjectionNodeletTest, OverlayShowsStaticBlueAndDynamicGreen)

@@ -38,16 +38,24 @@ struct DynamicGridConfig
   double eps_free_to_static = 0.005;
   double eps_free_to_dynamic = 0.02;
   double eps_free_to_unknown = 0.05;
-  double eps_unknown_to_static = 0.02;
-  double eps_unknown_to_dynamic = 0.02;
-  double eps_unknown_to_free = 0.02;
+  // U -> X act only through an observation (scaled by its information, see doc/grid_filter.md):
+  // the probability that one observation resolves an unknown cell into S, D or E.
+  double eps_unknown_to_static = 0.3;
+  double eps_unknown_to_dynamic = 0.3;
+  double eps_unknown_to_free = 0.3;
 
   // --- particles ---
   int particle_count = 1 << 17;       ///< particles carrying the dynamic mass (16..2^24)
   double birth_fraction = 0.1;        ///< newborn particles per cycle / particle_count (0..1]
-  double birth_velocity_sigma = 4.0;  ///< std-dev of a newborn particle's velocity per axis [m/s] (>0)
+  double birth_velocity_sigma = 6.0;  ///< std-dev of a newborn particle's velocity per axis [m/s] (>0)
   double acceleration_sigma = 2.0;    ///< process noise, std-dev of the acceleration per axis [m/s^2] (>=0)
   double max_speed = 50.0;            ///< particles faster than this are dropped [m/s] (>0)
+  /// Motion-driven birth: newborn particles of a cell that appears occupied (measured occupied
+  /// now, not in the previous scan) take, with probability birth_motion_fraction, the velocity
+  /// of the displacement from a cell vacated within the same interval (measured occupied before,
+  /// free now) at most birth_motion_speed * dt away [m/s] (>=0; 0 disables).
+  double birth_motion_speed = 20.0;
+  double birth_motion_fraction = 0.5;  ///< share of such newborn particles [0, 1]
   std::uint32_t seed = 42;            ///< seed of the std::mt19937 (same seed + input = same output)
 
   // --- classification (reporting only, the filter does not use it) ---
@@ -141,7 +149,12 @@ public:
 private:
   void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
-  std::size_t birthAndResample(std::size_t& born);
+  std::size_t birthAndResample(std::size_t& born, float dt);
+  /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
+  void findMotionCells(bool first);
+  /// Velocity of a newborn particle at (x, y) of cell `cell` from a random vacated cell within
+  /// birth_motion_speed * dt; false when there is none.
+  bool motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy);
   float normal();
   float uniform();
 
@@ -162,6 +175,16 @@ private:
   // birth scratch
   std::vector<std::int32_t> birth_cell_;
   std::vector<float> birth_x_, birth_y_, birth_vx_, birth_vy_, birth_w_;
+  // motion-driven birth
+  std::vector<std::uint8_t> occupied_mask_;   // measured occupied (p_o > 1/2) in the last scan
+  std::vector<std::uint8_t> previous_mask_;   // the same for the scan before, shifted with the grid
+  std::vector<std::int32_t> vacated_;         // cells occupied in the previous scan, free now
+  std::vector<std::int32_t> bucket_start_;    // vacated_ sorted by bucket: first index per bucket
+  std::vector<std::int32_t> bucket_cells_;
+  std::vector<std::int32_t> candidates_;      // scratch: vacated cells near one birth cell
+  int bucket_cols_ = 0;
+  int bucket_rows_ = 0;
+  bool have_previous_ = false;
   std::mt19937 rng_;
   std::uint32_t normal_bits_ = 0;
   bool normal_has_spare_ = false;
