@@ -44,6 +44,8 @@ DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& nh)
   readParam(nh, "particle_count", c.particle_count);
   readParam(nh, "birth_fraction", c.birth_fraction);
   readParam(nh, "birth_velocity_sigma", c.birth_velocity_sigma);
+  readParam(nh, "birth_motion_speed", c.birth_motion_speed);
+  readParam(nh, "birth_motion_fraction", c.birth_motion_fraction);
   readParam(nh, "acceleration_sigma", c.acceleration_sigma);
   readParam(nh, "max_speed", c.max_speed);
   int seed = static_cast<int>(c.seed);
