@@ -12,12 +12,10 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2/exceptions.h>
-#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <cmath>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -29,6 +27,7 @@
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
+#include "grid_vision_fusion/ros/stages.h"
 
 namespace grid_vision_fusion
 {
@@ -50,20 +49,13 @@ class GridProjectionNodelet : public nodelet::Nodelet
   void cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
   void tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, tf2_ros::FilterFailureReason reason);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
-  /// z of the ground plane in the grid frame at `stamp`; false (after a throttled warning) when
-  /// the tf grid frame ← ground_frame is missing.
-  bool groundZ(const std::string& grid_frame, const ros::Time& stamp, double& ground_z);
   /// Publishes the overlay of the cached image and projection with equal stamps, if any.
   void publishMatchedOverlay();
 
   boost::mutex connect_mutex_;
   GridProjectionConfig config_;
-  std::string ground_frame_ = "velo_link";
-  double ground_height_ = -1.73;
-  double max_grid_age_ = 0.5;
-  int image_cache_size_ = 5;
+  GridProjectionNodeOptions options_;
   int queue_size_ = 5;
-  bool lazy_ = true;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -92,30 +84,13 @@ void GridProjectionNodelet::onInit()
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   try
   {
-    config_ = gridProjectionConfigFromParams(pnh);
-    readParam(pnh, "ground_frame", ground_frame_);
-    readParam(pnh, "ground_height", ground_height_);
-    readParam(pnh, "max_grid_age", max_grid_age_);
-    readParam(pnh, "image_cache_size", image_cache_size_);
-    readParam(pnh, "lazy", lazy_);
-    readParam(pnh, "queue_size", queue_size_);
+    const NodeHandleParamSource params(pnh);
+    config_ = gridProjectionConfigFromParams(params);
+    options_ = gridProjectionNodeOptionsFromParams(params);
+    readParam(params, "queue_size", queue_size_);
     if (queue_size_ < 1)
     {
       throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
-    }
-    if (!std::isfinite(ground_height_))
-    {
-      throw std::invalid_argument("parameter ~ground_height must be finite");
-    }
-    if (!std::isfinite(max_grid_age_) || max_grid_age_ <= 0.0)
-    {
-      throw std::invalid_argument("parameter ~max_grid_age must be finite and > 0 s, got " +
-                                  std::to_string(max_grid_age_));
-    }
-    if (image_cache_size_ < 1)
-    {
-      throw std::invalid_argument("parameter ~image_cache_size must be >= 1, got " +
-                                  std::to_string(image_cache_size_));
     }
   }
   catch (const std::exception& e)
@@ -140,7 +115,7 @@ void GridProjectionNodelet::onInit()
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("projected_grid/image", 1, image_connect_cb, image_connect_cb);
-  if (!lazy_)
+  if (!options_.lazy)
   {
     // connectCb takes the lock itself; subscribe without it here.
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
@@ -151,16 +126,16 @@ void GridProjectionNodelet::onInit()
   }
   NODELET_INFO("grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
                "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
-               config_.occupied_threshold, config_.dynamic_ratio, ground_height_,
-               ground_frame_.empty() ? "in the grid frame" : "below/above the origin of ",
-               ground_frame_.c_str(), config_.column_mode ? "column mode" : "ground points only",
-               config_.predict_to_image_stamp ? "on" : "off", max_grid_age_, lazy_ ? "lazy" : "always subscribed");
+               config_.occupied_threshold, config_.dynamic_ratio, options_.ground_height,
+               options_.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
+               options_.ground_frame.c_str(), config_.column_mode ? "column mode" : "ground points only",
+               config_.predict_to_image_stamp ? "on" : "off", options_.max_grid_age, options_.lazy ? "lazy" : "always subscribed");
 }
 
 void GridProjectionNodelet::connectCb()
 {
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  if (!lazy_)
+  if (!options_.lazy)
   {
     return;
   }
@@ -216,9 +191,9 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
   {
     tf_target_frame_ = grid_msg->header.frame_id;
     std::vector<std::string> targets{tf_target_frame_};
-    if (!ground_frame_.empty() && ground_frame_ != tf_target_frame_)
+    if (!options_.ground_frame.empty() && options_.ground_frame != tf_target_frame_)
     {
-      targets.push_back(ground_frame_);
+      targets.push_back(options_.ground_frame);
     }
     tf_filter_->setTargetFrames(targets);
   }
@@ -254,28 +229,6 @@ void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr&
                         info_msg->header.frame_id.c_str(), tf_filter_->getTargetFramesString().c_str(), why);
 }
 
-bool GridProjectionNodelet::groundZ(const std::string& grid_frame, const ros::Time& stamp, double& ground_z)
-{
-  if (ground_frame_.empty())
-  {
-    ground_z = ground_height_;
-    return true;
-  }
-  try
-  {
-    const Eigen::Isometry3d grid_from_ground =
-        tf2::transformToEigen(tf_buffer_->lookupTransform(grid_frame, ground_frame_, stamp));
-    ground_z = (grid_from_ground * Eigen::Vector3d(0.0, 0.0, ground_height_)).z();
-    return true;
-  }
-  catch (const tf2::TransformException& e)
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: no tf %s <- %s (ground_frame) at t=%.3f, nothing published: %s",
-                          grid_frame.c_str(), ground_frame_.c_str(), stamp.toSec(), e.what());
-    return false;
-  }
-}
-
 void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
 {
   DynamicGrid::ConstPtr grid;
@@ -289,76 +242,32 @@ void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr
                           info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
     return;
   }
-  std::unique_ptr<PinholeCamera> camera;
+  ProjectedGrid::Ptr projected;
+  std::size_t invalid_cells = 0;
   try
   {
-    camera = std::make_unique<PinholeCamera>(pinholeFromCameraInfo(*info_msg));
+    projected = projectGridIntoCamera(*grid, *info_msg, *tf_buffer_, options_, config_, &invalid_cells);
   }
-  catch (const std::invalid_argument& e)
+  catch (const ProjectionSkipped& e)
   {
-    NODELET_ERROR_THROTTLE(kThrottleS, "grid_projection: unusable camera_info on %s (frame '%s'), nothing published: %s",
-                           sub_info_.getTopic().c_str(), info_msg->header.frame_id.c_str(), e.what());
-    return;
-  }
-  const ros::Time& image_stamp = info_msg->header.stamp;
-  const double grid_age = (image_stamp - grid->header.stamp).toSec();
-  if (std::abs(grid_age) > max_grid_age_)
-  {
-    NODELET_WARN_THROTTLE(kThrottleS,
-                          "grid_projection: latest grid on %s (t=%.3f) is %.3f s away from the image (t=%.3f), "
-                          "more than ~max_grid_age %.3f s: nothing published",
-                          sub_grid_.getTopic().c_str(), grid->header.stamp.toSec(), grid_age, image_stamp.toSec(),
-                          max_grid_age_);
-    return;
-  }
-
-  ProjectionGeometry geometry;
-  geometry.time_offset = grid_age;
-  try
-  {
-    // Non-blocking: lookupTransform without a timeout answers from the buffer or throws.
-    geometry.camera_from_grid = tf2::transformToEigen(
-        tf_buffer_->lookupTransform(info_msg->header.frame_id, grid->header.frame_id, image_stamp));
-  }
-  catch (const tf2::TransformException& e)
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: no tf %s <- %s at t=%.3f, nothing published: %s",
-                          info_msg->header.frame_id.c_str(), grid->header.frame_id.c_str(), image_stamp.toSec(),
+    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info of %s at t=%.3f with the grid of %s: %s; nothing "
+                          "published",
+                          sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(),
                           e.what());
     return;
   }
-  if (!groundZ(grid->header.frame_id, image_stamp, geometry.ground_z))
-  {
-    return;
-  }
-
-  ProjectedCells cells;
-  try
-  {
-    cells = projectGrid(gridCellsViewOf(*grid), *camera, geometry, config_);
-  }
-  catch (const std::invalid_argument& e)
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: cannot project the grid of %s into %s: %s",
-                          sub_grid_.getTopic().c_str(), info_msg->header.frame_id.c_str(), e.what());
-    return;
-  }
-  if (cells.cells_invalid > 0)
+  if (invalid_cells > 0)
   {
     NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: %zu cells of the grid on %s skipped (NaN/Inf probability or "
                           "velocity)",
-                          cells.cells_invalid, sub_grid_.getTopic().c_str());
+                          invalid_cells, sub_grid_.getTopic().c_str());
   }
-  NODELET_DEBUG_THROTTLE(kThrottleS, "grid_projection: %zu of %zu selected cells projected (%zu behind, %zu outside)",
-                         cells.size(), cells.cells_selected, cells.points_behind, cells.points_outside);
-
-  ProjectedGrid::Ptr projected = projectedGridToMsg(std::move(cells), info_msg->header, grid->header, *camera);
   if (pub_image_.getNumSubscribers() > 0)
   {
     {
       std::lock_guard<std::mutex> lock(overlay_mutex_);
       projections_.push_back(projected);
-      while (projections_.size() > static_cast<std::size_t>(image_cache_size_))
+      while (projections_.size() > static_cast<std::size_t>(options_.image_cache_size))
       {
         projections_.pop_front();
       }
@@ -373,7 +282,7 @@ void GridProjectionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_ms
   {
     std::lock_guard<std::mutex> lock(overlay_mutex_);
     images_.push_back(image_msg);
-    while (images_.size() > static_cast<std::size_t>(image_cache_size_))
+    while (images_.size() > static_cast<std::size_t>(options_.image_cache_size))
     {
       images_.pop_front();
     }
