@@ -43,7 +43,7 @@ step "4/6 the nodelet chain on the bag: kitti_replay.launch (detector: replay of
 port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')
 echo "roslaunch on port $port, log in $out/replay.log"
 roslaunch -p "$port" grid_vision_fusion kitti_replay.launch bag:="$out/synthetic_drive.bag" \
-  backend:=replay replay_directory:="$drive/label_2" rviz:="$rviz" record:="$out/objects.bag" \
+  replay_directory:="$drive/label_2" rviz:="$rviz" record:="$out/objects.bag" \
   record_topics:="/objects /objects/markers /objects/image /detections /grid/occupancy /tf /tf_static" \
   > "$out/replay.log" 2>&1
 [[ -f "$out/objects.bag" ]] || { echo "demo: no recording: see $out/replay.log" >&2; exit 1; }
