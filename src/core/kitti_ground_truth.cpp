@@ -292,12 +292,7 @@ std::vector<MotionLabel> parseMotionLabels(std::istream& input, const std::strin
   while (std::getline(input, text))
   {
     ++line;
-    std::istringstream fields(text);
-    std::vector<std::string> tokens;
-    for (std::string token; fields >> token;)
-    {
-      tokens.push_back(token);
-    }
+    std::vector<std::string> tokens = splitFields(text);
     if (tokens.empty())
     {
       kitti_part << '\n';

@@ -49,6 +49,17 @@ int toInt(const std::string& token, std::size_t field, const std::string& source
 
 }  // namespace
 
+std::vector<std::string> splitFields(const std::string& line)
+{
+  std::istringstream fields(line);
+  std::vector<std::string> tokens;
+  for (std::string token; fields >> token;)
+  {
+    tokens.push_back(token);
+  }
+  return tokens;
+}
+
 std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::string& source_name)
 {
   std::vector<KittiObjectLabel> labels;
@@ -57,12 +68,7 @@ std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::s
   while (std::getline(input, text))
   {
     ++line;
-    std::istringstream fields(text);
-    std::vector<std::string> tokens;
-    for (std::string token; fields >> token;)
-    {
-      tokens.push_back(token);
-    }
+    const std::vector<std::string> tokens = splitFields(text);
     if (tokens.empty())
     {
       continue;

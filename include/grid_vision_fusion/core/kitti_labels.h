@@ -48,6 +48,9 @@ public:
 ///         not an integer, or a box with right < left or bottom < top.
 std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::string& source_name);
 
+/// The whitespace-separated fields of one line of a KITTI text file.
+std::vector<std::string> splitFields(const std::string& line);
+
 /// Reads the KITTI label file at `path`.
 /// @throws KittiLabelError when the file cannot be opened ("<path>: cannot open ...") or a
 ///         line is malformed (see parseKittiLabels()).
