@@ -165,16 +165,7 @@ void ProjectedPoints::add(float pu, float pv, float px, float py, float pvx, flo
 
 ProjectedPointsView ProjectedPoints::view() const
 {
-  ProjectedPointsView view;
-  view.size = u.size();
-  view.u = u.data();
-  view.v = v.data();
-  view.x = x.data();
-  view.y = y.data();
-  view.vx = vx.data();
-  view.vy = vy.data();
-  view.state = state.data();
-  return view;
+  return pointsViewOf(*this);
 }
 
 FusionRegion FusionRegion::fromBox(const BoundingBox& box, const FusionConfig& config)

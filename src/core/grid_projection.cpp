@@ -85,16 +85,7 @@ void ProjectedCells::reserve(std::size_t points)
 
 ProjectedPointsView ProjectedCells::view() const
 {
-  ProjectedPointsView points;
-  points.size = u.size();
-  points.u = u.data();
-  points.v = v.data();
-  points.x = x.data();
-  points.y = y.data();
-  points.vx = vx.data();
-  points.vy = vy.data();
-  points.state = state.data();
-  return points;
+  return pointsViewOf(*this);
 }
 
 ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,

@@ -79,16 +79,7 @@ std::string checkProjectedGrid(const ProjectedGrid& msg)
 
 ProjectedPointsView viewOf(const ProjectedGrid& msg)
 {
-  ProjectedPointsView view;
-  view.size = msg.u.size();
-  view.u = msg.u.data();
-  view.v = msg.v.data();
-  view.x = msg.x.data();
-  view.y = msg.y.data();
-  view.vx = msg.vx.data();
-  view.vy = msg.vy.data();
-  view.state = msg.state.data();
-  return view;
+  return pointsViewOf(msg);
 }
 
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header,

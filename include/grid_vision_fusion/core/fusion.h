@@ -97,6 +97,23 @@ struct ProjectedPointsView
   const std::uint8_t* state = nullptr;  ///< CellState values
 };
 
+/// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and
+/// state (uint8 vector) of equal length, e.g. ProjectedPoints or a ProjectedGrid message.
+template <typename PointArrays>
+ProjectedPointsView pointsViewOf(const PointArrays& arrays)
+{
+  ProjectedPointsView view;
+  view.size = arrays.u.size();
+  view.u = arrays.u.data();
+  view.v = arrays.v.data();
+  view.x = arrays.x.data();
+  view.y = arrays.y.data();
+  view.vx = arrays.vx.data();
+  view.vy = arrays.vy.data();
+  view.state = arrays.state.data();
+  return view;
+}
+
 /// Owning structure-of-arrays point set; view() lends it to fuse().
 struct ProjectedPoints
 {
