@@ -1,5 +1,5 @@
-// Benchmark of the dynamic grid on KITTI-sized scans (64 beams, ~120 k points) of a box world:
-// a street with buildings, parked and moving cars, the ego vehicle driving at 10 m/s.
+// Benchmark of the dynamic grid on KITTI-sized scans (64 beams, ~120 k points) of a simulated
+// street with buildings, parked and moving cars, the ego vehicle driving at 10 m/s.
 // Reports, per scan, the median of the inverse sensor model, of the rest of the filter cycle
 // and of the whole cycle [ms] (counters *_median_ms), for the default grid and particle count,
 // for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells. Not a test: run it by hand,
@@ -9,20 +9,16 @@
 
 #include <algorithm>
 #include <ctime>
+#include <random>
 #include <vector>
 
-#include "box_world_lidar.h"
-#include "grid_vision_fusion/core/dynamic_grid_filter.h"
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
+#include "grid_vision_fusion/simulation/synthetic_world.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
-using testing::Box;
-using testing::BoxWorldLidar;
-using testing::BoxWorldLidarConfig;
-using testing::sensorPose;
-
 constexpr int kScans = 40;
 constexpr double kPeriod = 0.1;
 constexpr double kEgoSpeed = 10.0;
@@ -33,54 +29,63 @@ struct Scan
   std::vector<float> xyz;
 };
 
+Actor car(Trajectory trajectory)
+{
+  Actor actor;
+  actor.type = "Car";
+  actor.length = 4.0;
+  actor.width = 2.0;
+  actor.height = 1.5;
+  actor.trajectory = std::move(trajectory);
+  return actor;
+}
+
+// A street along +x: buildings on both sides, parked cars, an oncoming car, a car ahead and a
+// crossing car; the ego drives at 10 m/s. Simulated with the HDL-64E of the simulation library.
 const std::vector<Scan>& scans()
 {
   static const std::vector<Scan> sequence = []
   {
-    BoxWorldLidarConfig config;
-    config.horizontal_resolution_deg = 0.18;  // 2000 columns x 64 beams, ~120 k points
-    config.range_noise_sigma = 0.02;
-    BoxWorldLidar lidar(config);
+    std::vector<SceneryBox> buildings;
+    for (double side : {-1.0, 1.0})
+    {
+      for (int b = -3; b < 12; ++b)
+      {
+        SceneryBox building;
+        building.box.pose = {b * 14.0, side * 16.0, 0.0};
+        building.box.length = 12.0;
+        building.box.width = 6.0;
+        building.box.height = 8.0;
+        buildings.push_back(building);
+      }
+    }
+    std::vector<Actor> actors;
+    for (int c = -2; c < 14; ++c)
+    {
+      actors.push_back(car(Trajectory::parked({c * 7.0 + 2.0, (c % 2 == 0 ? 1.0 : -1.0) * 6.5, 0.0})));
+    }
+    const double end = kScans * kPeriod;
+    actors.push_back(car(Trajectory::waypoints({{0.0, 60.0, -2.0}, {end, 60.0 - 10.0 * end, -2.0}})));
+    actors.push_back(car(Trajectory::waypoints({{0.0, 15.0, 2.0}, {end, 15.0 + 8.0 * end, 2.0}})));
+    actors.push_back(
+        car(Trajectory::waypoints({{0.0, 25.0, -12.0}, {end, 25.0 + kEgoSpeed * end, -12.0 + 4.0 * end}})));
+    LidarConfig lidar;
+    lidar.azimuth_steps = 2000;  // 2000 columns x 64 beams, ~120 k points
+    lidar.dropout = 0.0;
+    lidar.range_noise_std = 0.02;
+    std::mt19937 rng(7);
     std::vector<Scan> out;
     for (int k = 0; k < kScans; ++k)
     {
       const double t = k * kPeriod;
-      std::vector<Box> boxes;
-      for (double side : {-1.0, 1.0})  // buildings
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.translation() = Eigen::Vector3d(kEgoSpeed * t, 0.0, 1.73);
+      std::vector<float> xyz;
+      for (const LidarPoint& p : simulateLidarScan(SceneSnapshot(actors, buildings, t), pose, lidar, rng))
       {
-        for (int b = -3; b < 12; ++b)
-        {
-          Box building;
-          building.x = b * 14.0;
-          building.y = side * 16.0;
-          building.length = 12.0;
-          building.width = 6.0;
-          building.height = 8.0;
-          boxes.push_back(building);
-        }
+        xyz.insert(xyz.end(), {p.x, p.y, p.z});
       }
-      for (int c = -2; c < 14; ++c)  // parked cars
-      {
-        Box car;
-        car.x = c * 7.0 + 2.0;
-        car.y = (c % 2 == 0 ? 1.0 : -1.0) * 6.5;
-        boxes.push_back(car);
-      }
-      Box oncoming;  // moving cars
-      oncoming.x = 60.0 - 10.0 * t;
-      oncoming.y = -2.0;
-      boxes.push_back(oncoming);
-      Box ahead;
-      ahead.x = 15.0 + 8.0 * t;
-      ahead.y = 2.0;
-      boxes.push_back(ahead);
-      Box crossing;
-      crossing.x = 25.0 + kEgoSpeed * t;
-      crossing.y = -12.0 + 4.0 * t;
-      crossing.yaw = M_PI / 2;
-      boxes.push_back(crossing);
-      const Eigen::Isometry3d pose = sensorPose(kEgoSpeed * t, 0.0, 1.73);
-      out.push_back({pose, lidar.scan(pose, boxes)});
+      out.push_back({pose, std::move(xyz)});
     }
     return out;
   }();

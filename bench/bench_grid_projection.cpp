@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "grid_vision_fusion/core/grid_projection.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
 
 namespace grid_vision_fusion
 {

@@ -21,7 +21,7 @@
 #include <string>
 #include <thread>
 
-#include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
 
 namespace
 {

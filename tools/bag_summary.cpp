@@ -21,8 +21,8 @@
 #include <string>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
-#include "grid_vision_fusion/core/fusion.h"
-#include "grid_vision_fusion/core/progress_bar.h"
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/cli/progress_bar.h"
 
 namespace
 {

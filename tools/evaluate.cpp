@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/core/evaluation.h"
-#include "grid_vision_fusion/core/evaluation_report.h"
-#include "grid_vision_fusion/core/kitti_ground_truth.h"
-#include "grid_vision_fusion/core/progress_bar.h"
-#include "grid_vision_fusion/ros/detection_bag.h"
+#include "grid_vision_fusion/evaluation/evaluation.h"
+#include "grid_vision_fusion/evaluation/evaluation_report.h"
+#include "grid_vision_fusion/evaluation/kitti_ground_truth.h"
+#include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/offline/detection_bag.h"
 
 namespace gvf = grid_vision_fusion;
 

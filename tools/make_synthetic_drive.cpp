@@ -11,8 +11,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "grid_vision_fusion/core/progress_bar.h"
-#include "grid_vision_fusion/core/synthetic_drive.h"
+#include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/simulation/synthetic_drive.h"
 
 namespace
 {

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/core/progress_bar.h"
-#include "grid_vision_fusion/ros/pipeline.h"
+#include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/offline/pipeline.h"
 
 namespace gvf = grid_vision_fusion;
 

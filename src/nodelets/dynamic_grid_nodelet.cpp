@@ -20,7 +20,7 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
-#include "grid_vision_fusion/core/dynamic_grid_filter.h"
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
 #include "grid_vision_fusion/ros/grid_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/ros/stages.h"

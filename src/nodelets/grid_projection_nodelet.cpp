@@ -22,8 +22,8 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/core/grid_projection.h"
-#include "grid_vision_fusion/core/overlay.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
+#include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"

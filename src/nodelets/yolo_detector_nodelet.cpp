@@ -20,8 +20,8 @@
 
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/YoloDetectorReconfigureConfig.h"
-#include "grid_vision_fusion/core/detection_replay.h"
-#include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/detection/detection_replay.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/ros/stages.h"

@@ -4,7 +4,7 @@
 
 #include <sstream>
 
-#include "grid_vision_fusion/core/overlay.h"
+#include "grid_vision_fusion/fusion/overlay.h"
 
 namespace grid_vision_fusion
 {

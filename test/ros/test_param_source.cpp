@@ -7,7 +7,7 @@
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros/grid_conversions.h"
 #include "grid_vision_fusion/ros/params.h"
-#include "grid_vision_fusion/ros/pipeline.h"
+#include "grid_vision_fusion/offline/pipeline.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/stages.h"
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "grid_vision_fusion/Detection2DArray.h"
-#include "grid_vision_fusion/core/detection_replay.h"
-#include "grid_vision_fusion/core/fusion.h"
-#include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/detection/detection_replay.h"
+#include "grid_vision_fusion/types.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion

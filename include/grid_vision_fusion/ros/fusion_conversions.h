@@ -9,7 +9,7 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/core/fusion.h"
+#include "grid_vision_fusion/fusion/fusion.h"
 
 namespace grid_vision_fusion
 {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "grid_vision_fusion/DynamicGrid.h"
-#include "grid_vision_fusion/core/dynamic_grid_filter.h"
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
 #include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion

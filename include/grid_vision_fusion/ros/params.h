@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "grid_vision_fusion/core/fusion.h"
+#include "grid_vision_fusion/fusion/fusion.h"
 
 namespace grid_vision_fusion
 {

@@ -10,7 +10,7 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/core/grid_projection.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
 #include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion

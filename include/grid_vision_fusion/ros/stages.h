@@ -19,9 +19,9 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/core/fusion.h"
-#include "grid_vision_fusion/core/grid_projection.h"
-#include "grid_vision_fusion/core/yolo_detector.h"
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion

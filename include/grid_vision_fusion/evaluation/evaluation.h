@@ -1,0 +1,106 @@
+// Evaluation like the paper (P/R/F1 per motion x class, Pascal VOC AP, mAP within a range) and
+// beyond it (motion confusion, position, speed and heading errors of matched objects).
+//
+// The matching follows the Cartucho/mAP tool (github.com/Cartucho/mAP, main.py) so that its
+// figures can be cross-checked with it: per class, detections sorted by descending score
+// (stable: ties keep the input order); each takes the ground truth of the same class and frame
+// with the largest IoU, used or not; IoU >= threshold and unused -> TP (the ground truth becomes
+// used), used -> FP (no fallback to the second best), a difficult ground truth -> ignored;
+// IoU below the threshold -> FP. IoU with the "+1 pixel" convention. AP = VOC2012 all-point
+// interpolation; mAP = mean AP over the classes present in the (non-difficult) ground truth.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/types.h"
+
+namespace grid_vision_fusion
+{
+/// A ground-truth or detected object in one frame.
+struct EvalObject
+{
+  std::string frame;        ///< frame identifier (e.g. "000042"); matching happens within a frame
+  std::string label;        ///< object class, e.g. "car"
+  Motion motion = Motion::kUnknown;
+  BoundingBox box;          ///< 2-D box in the image [px]
+  float score = 1.F;        ///< detector confidence (1 for ground truth)
+  bool difficult = false;   ///< ground truth only: ignored by the matching
+  double longitudinal_m = 0.0;  ///< distance ahead of the ego vehicle [m], for the range filter
+  bool has_state = false;   ///< position/velocity below are valid
+  double x = 0.0, y = 0.0;      ///< position [m] (world frame)
+  double vx = 0.0, vy = 0.0;    ///< velocity [m/s] (world frame)
+};
+
+/// Parameters of evaluate().
+struct EvaluationConfig
+{
+  double iou_threshold = 0.5;         ///< minimum IoU of a true positive, (0, 1]
+  double max_longitudinal_m = 30.0;   ///< objects farther ahead are left out [m], > 0
+  /// Evaluate per motion x class ("dynamicCar"); false: per class only ("car").
+  bool motion_classes = true;
+
+  /// @throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+/// Figures of one evaluation class.
+struct ClassMetrics
+{
+  std::string name;
+  std::size_t ground_truth = 0;   ///< non-difficult ground-truth objects
+  std::size_t detections = 0;     ///< detections counted (not ignored)
+  std::size_t true_positives = 0;
+  std::size_t false_positives = 0;
+  double precision = 0.0;         ///< at the operating point (all detections)
+  double recall = 0.0;
+  double f1 = 0.0;
+  double average_precision = 0.0;
+  std::vector<double> recall_curve;     ///< cumulative, one point per counted detection
+  std::vector<double> precision_curve;
+};
+
+/// Median, mean and 90th percentile of a set of errors.
+struct ErrorStats
+{
+  std::size_t count = 0;
+  double median = 0.0;
+  double mean = 0.0;
+  double p90 = 0.0;  ///< linear interpolation between closest ranks
+  std::vector<double> values;
+};
+
+/// Everything evaluate() measures.
+struct EvaluationResult
+{
+  std::vector<ClassMetrics> classes;  ///< sorted by name; classes of the ground truth first
+  double mean_average_precision = 0.0;  ///< over the classes present in the ground truth
+  /// confusion[truth][predicted], indices = Motion values (unknown, static, dynamic), over the
+  /// objects matched by class and IoU regardless of motion.
+  std::array<std::array<std::size_t, 3>, 3> motion_confusion{};
+  ErrorStats position_error_m;     ///< |p_det − p_gt| of matched objects with a state
+  ErrorStats speed_error_mps;      ///< ||v_det| − |v_gt|| of matched objects with a state
+  ErrorStats heading_error_rad;    ///< wrapped |heading_det − heading_gt|, both dynamic
+};
+
+/// Class name of an object: "dynamicCar" for (kDynamic, "car") when `with_motion`, else "car".
+std::string evaluationClass(const std::string& label, Motion motion, bool with_motion);
+
+/// IoU of two boxes with the "+1 pixel" convention (inclusive pixel bounds). 0 when disjoint.
+double boxIou(const BoundingBox& a, const BoundingBox& b);
+
+/// VOC2012 all-point interpolated AP of a precision/recall curve (same length, in detection
+/// order). 0 for an empty curve.
+double vocAveragePrecision(const std::vector<double>& recall, const std::vector<double>& precision);
+
+/// Statistics of `values` (copied); all zero for an empty set.
+ErrorStats errorStats(std::vector<double> values);
+
+/// Evaluates `detections` against `ground_truth` (see the file comment for the rules).
+EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const EvaluationConfig& config);
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,43 @@
+// Outputs of the evaluation: metrics.json, report.md (tables like the paper's Tables I and II),
+// Cartucho/mAP input folders, PR curves and error histograms as PNG (drawn with OpenCV).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/evaluation/evaluation.h"
+
+namespace grid_vision_fusion
+{
+/// The result as JSON: per class figures and curves, mAP, confusion matrix, error statistics.
+std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config);
+
+/// A Markdown report: Table I (precision, recall, F1 per class, in percent), Table II (AP per
+/// class and mAP), the motion confusion matrix and the error statistics.
+std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfig& config);
+
+/// Writes the Cartucho/mAP inputs under `dir`: ground-truth/<frame>.txt with lines
+/// "<class> <left> <top> <right> <bottom>[ difficult]" and detection-results/<frame>.txt with
+/// "<class> <score> <left> <top> <right> <bottom>", one file per frame of either list (empty when
+/// the frame has no object), classes named as evaluate() names them, the range filter applied.
+/// @throws std::runtime_error naming a file that cannot be written.
+void writeCartuchoFolders(const std::string& dir, const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const EvaluationConfig& config);
+
+/// A precision/recall plot of one class (recall on x, precision on y, both [0, 1]), titled
+/// with its AP. 640 x 480, CV_8UC3.
+cv::Mat drawPrCurve(const ClassMetrics& metrics);
+
+/// A histogram of `values` with `bins` equal bins from 0 to the largest value, titled `title`,
+/// x axis labelled `unit`, with the median and the 90th percentile marked. 640 x 480, CV_8UC3.
+cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const std::string& unit, int bins = 20);
+
+/// Writes metrics.json, report.md, the Cartucho folders, pr_<class>.png for every class and
+/// hist_position.png, hist_speed.png, hist_heading.png into `dir` (created if needed).
+/// @throws std::runtime_error naming a file that cannot be written.
+void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result, const EvaluationConfig& config,
+                            const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections);
+
+}  // namespace grid_vision_fusion

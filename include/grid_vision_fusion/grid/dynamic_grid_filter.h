@@ -1,0 +1,200 @@
+// CMCDOT-style dynamic occupancy grid: four analytic states per cell (static, dynamic, empty,
+// unknown), the velocity of the dynamic part carried by particles (conditional Monte Carlo).
+// This is the documented reconstruction of DESIGN.md ("Grid filter"); every equation, with its
+// parameters and their defaults, is in doc/grid_filter.md.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/grid/grid_map.h"
+#include "grid_vision_fusion/grid/inverse_sensor_model.h"
+
+namespace grid_vision_fusion
+{
+/// Parameters of the filter. Defaults: KITTI (HDL-64E at 10 Hz).
+struct DynamicGridConfig
+{
+  // --- grid ---
+  int width = 300;          ///< cells along x [cells] (8..4000)
+  int height = 300;         ///< cells along y [cells] (8..4000)
+  double resolution = 0.2;  ///< cell edge [m] (0.01..5)
+  double lookahead = 15.0;  ///< grid centre this far ahead of the sensor along its heading [m]
+
+  // --- time ---
+  double max_time_gap = 1.0;       ///< a larger gap between scans resets the grid [s] (>0)
+  double transition_period = 0.1;  ///< period the eps_* probabilities refer to [s] (>0)
+
+  // --- transitions: probability of leaving state X for Y within transition_period ---
+  double eps_static_to_dynamic = 0.005;
+  double eps_static_to_unknown = 0.05;
+  double eps_dynamic_to_static = 0.01;
+  double eps_dynamic_to_unknown = 0.05;
+  double eps_free_to_static = 0.005;
+  double eps_free_to_dynamic = 0.02;
+  double eps_free_to_unknown = 0.05;
+  // U -> X act only through an observation (scaled by its information, see doc/grid_filter.md):
+  // the probability that one observation resolves an unknown cell into S, D or E.
+  double eps_unknown_to_static = 0.3;
+  double eps_unknown_to_dynamic = 0.3;
+  double eps_unknown_to_free = 0.3;
+
+  // --- particles ---
+  int particle_count = 1 << 17;       ///< particles carrying the dynamic mass (16..2^24)
+  double birth_fraction = 0.1;        ///< newborn particles per cycle / particle_count (0..1]
+  double birth_velocity_sigma = 6.0;  ///< std-dev of a newborn particle's velocity per axis [m/s] (>0)
+  double acceleration_sigma = 2.0;    ///< process noise, std-dev of the acceleration per axis [m/s^2] (>=0)
+  double max_speed = 50.0;            ///< particles faster than this are dropped [m/s] (>0)
+  /// Motion-driven birth: newborn particles of a cell that appears occupied (measured occupied
+  /// now, not in the previous scan) take, with probability birth_motion_fraction, the velocity
+  /// of the displacement from a cell vacated within the same interval (measured occupied before,
+  /// free now) at most birth_motion_speed * dt away [m/s] (>=0; 0 disables).
+  double birth_motion_speed = 20.0;
+  double birth_motion_fraction = 0.5;  ///< share of such newborn particles [0, 1]
+  std::uint32_t seed = 42;            ///< seed of the std::mt19937 (same seed + input = same output)
+
+  // --- classification (reporting only, the filter does not use it) ---
+  double dynamic_threshold = 0.5;      ///< P(D) from which a cell may be dynamic (0..1]
+  double min_dynamic_speed = 1.0;      ///< mean speed from which a cell may be dynamic [m/s] (>=0)
+  double mahalanobis_threshold = 4.0;  ///< v^T Sigma^-1 v from which a cell may be dynamic (>=0)
+  double occupied_threshold = 0.5;     ///< P(S) + P(D) from which a cell is occupied (0..1]
+
+  InverseSensorModelConfig sensor_model;
+
+  /// @throws std::invalid_argument naming the first field out of its range (sensor_model too).
+  void validate() const;
+};
+
+/// What one cycle did.
+struct DynamicGridCycle
+{
+  bool reset = false;                ///< the grid was reset before this scan (time jump or gap)
+  std::string reset_reason;          ///< why, for the caller's warning; empty when reset is false
+  double dt = 0.0;                   ///< time since the previous scan [s] (0 on the first one)
+  std::int64_t shift_cols = 0;       ///< grid moved by this many cells along x
+  std::int64_t shift_rows = 0;       ///< grid moved by this many cells along y
+  std::size_t particles_in_use = 0;  ///< particles with a non-zero weight after resampling
+  std::size_t particles_born = 0;
+  InverseSensorModelStats sensor;     ///< counters of the inverse sensor model
+  double sensor_model_seconds = 0.0;  ///< wall time of the inverse sensor model [s]
+  double filter_seconds = 0.0;        ///< wall time of everything else in the cycle [s]
+};
+
+/// Motion class of a cell for reporting (grid/cells, occupancy).
+enum class CellClass : std::uint8_t
+{
+  kUnknown = 0,
+  kFree = 1,
+  kStatic = 2,
+  kDynamic = 3,
+};
+
+/// Particles as a structure of arrays; positions relative to the corner of grid cell (0,0).
+struct ParticleArrays
+{
+  std::vector<float> x;            ///< [m] from the grid origin along +x
+  std::vector<float> y;            ///< [m] from the grid origin along +y
+  std::vector<float> vx;           ///< [m/s]
+  std::vector<float> vy;           ///< [m/s]
+  std::vector<float> weight;       ///< absolute dynamic mass; the sum over a cell is its persistent P(D)
+  std::vector<std::int32_t> cell;  ///< row-major cell index, -1 when outside the grid
+
+  void resize(std::size_t n);
+  std::size_t size() const { return weight.size(); }
+};
+
+/// The dynamic occupancy grid filter. Not thread-safe; single-threaded and deterministic for a
+/// given seed and input sequence.
+class DynamicGridFilter
+{
+public:
+  /// @throws std::invalid_argument when `config` is invalid.
+  explicit DynamicGridFilter(const DynamicGridConfig& config);
+
+  /// One filter cycle for the scan `cloud` (sensor frame) taken at `stamp` [s] with the
+  /// sensor at `world_from_sensor` (fixed frame <- sensor): grid shift, inverse sensor model,
+  /// prediction, Bayes update, persistent/newborn split, velocity statistics, birth,
+  /// resampling. An empty cloud gives a prediction step only. A stamp before the previous one
+  /// or more than max_time_gap after it resets the grid first (reported in the result).
+  DynamicGridCycle update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
+                          double stamp);
+
+  /// Forgets everything: all cells unknown, no particle, the generator re-seeded.
+  void reset();
+
+  const DynamicGridConfig& config() const { return config_; }
+  const GridGeometry& geometry() const { return geometry_; }
+  const CellStates& cells() const { return cells_; }
+  const ParticleArrays& particles() const { return particles_; }
+  /// p_o of the last scan per cell (0.5 = no information).
+  const std::vector<float>& measuredOccupancy() const { return occupancy_; }
+  /// Ground height below the sensor of the last scan, fixed frame z [m].
+  double groundZ() const { return ground_z_; }
+  bool initialised() const { return initialised_; }
+  double lastStamp() const { return last_stamp_; }
+
+  /// Replaces the classification thresholds (dynamic_threshold, min_dynamic_speed,
+  /// mahalanobis_threshold, occupied_threshold) by those of `thresholds`; they only affect
+  /// reporting, so this is safe between cycles. @throws std::invalid_argument as validate().
+  void setClassification(const DynamicGridConfig& thresholds);
+
+  /// Reporting class of cell `index` (see DynamicGridConfig, classification).
+  CellClass classify(std::size_t index) const;
+
+private:
+  void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
+  void predictParticles(float dt, float keep, float to_static, float to_unknown);
+  std::size_t birthAndResample(std::size_t& born, float dt);
+  /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
+  void findMotionCells(bool first);
+  /// Velocity of a newborn particle at (x, y) of cell `cell` from a random vacated cell within
+  /// birth_motion_speed * dt; false when there is none.
+  bool motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy);
+  float normal();
+  float uniform();
+
+  DynamicGridConfig config_;
+  InverseSensorModel sensor_model_;
+  GridGeometry geometry_;
+  CellStates cells_;
+  ParticleArrays particles_;
+  ParticleArrays resampled_;
+  std::vector<float> occupancy_;
+  // per-cell scratch
+  std::vector<float> pred_dynamic_;          // persistent predicted dynamic mass (particles)
+  std::vector<float> from_dynamic_static_;   // D -> S mass arriving with particles
+  std::vector<float> from_dynamic_unknown_;  // D -> U mass arriving with particles
+  std::vector<float> newborn_;               // posterior newborn dynamic mass
+  std::vector<float> persistent_factor_;
+  std::vector<float> stat_w_, stat_vx_, stat_vy_, stat_vxx_, stat_vyy_;
+  // birth scratch
+  std::vector<std::int32_t> birth_cell_;
+  std::vector<float> birth_x_, birth_y_, birth_vx_, birth_vy_, birth_w_;
+  // motion-driven birth
+  std::vector<std::uint8_t> occupied_mask_;   // measured occupied (p_o > 1/2) in the last scan
+  std::vector<std::uint8_t> previous_mask_;   // the same for the scan before, shifted with the grid
+  std::vector<std::int32_t> vacated_;         // cells occupied in the previous scan, free now
+  std::vector<std::int32_t> bucket_start_;    // vacated_ sorted by bucket: first index per bucket
+  std::vector<std::int32_t> bucket_cells_;
+  std::vector<std::int32_t> candidates_;      // scratch: vacated cells near one birth cell
+  int bucket_cols_ = 0;
+  int bucket_rows_ = 0;
+  bool have_previous_ = false;
+  std::mt19937 rng_;
+  std::uint32_t normal_bits_ = 0;
+  bool normal_has_spare_ = false;
+  bool initialised_ = false;
+  double last_stamp_ = 0.0;
+  double ground_z_ = 0.0;
+};
+
+/// Inverse of the standard normal CDF (Acklam's rational approximation, relative error
+/// < 1.2e-9) for p in (0, 1).
+double inverseNormalCdf(double p);
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,110 @@
+// Inverse sensor model of a 3-D lidar scan on the dynamic grid: ground removal per polar sector
+// and polar ray casting (free before the first obstacle hit, occupied around it, unknown
+// behind it). See doc/grid_filter.md, section "Inverse sensor model".
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "grid_vision_fusion/grid/grid_map.h"
+
+namespace grid_vision_fusion
+{
+/// A read-only view of float32 x, y, z values inside a foreign buffer (e.g. the data of a
+/// sensor_msgs/PointCloud2), so the scan is never copied. Point (row, col) starts at
+/// data + row * row_step + col * point_step; its coordinates are the float32 at x_offset,
+/// y_offset and z_offset bytes from there, in the sensor frame [m].
+struct PointCloudView
+{
+  const std::uint8_t* data = nullptr;
+  std::size_t width = 0;       ///< points per row
+  std::size_t height = 0;      ///< rows (1 for an unorganised cloud)
+  std::size_t point_step = 0;  ///< bytes between consecutive points of a row
+  std::size_t row_step = 0;    ///< bytes between rows
+  std::size_t x_offset = 0;
+  std::size_t y_offset = 4;
+  std::size_t z_offset = 8;
+
+  std::size_t size() const { return width * height; }
+  /// View of a packed array of xyz float triples (point_step 12), e.g. std::vector<Eigen::Vector3f>.
+  static PointCloudView packedXyz(const float* xyz, std::size_t count);
+};
+
+/// Parameters of the inverse sensor model. Defaults: Velodyne HDL-64E on KITTI.
+struct InverseSensorModelConfig
+{
+  double sensor_height = 1.73;       ///< lidar above the ground, first ground guess [m] (>0)
+  double min_range = 2.5;            ///< horizontal range below which points are ignored (ego body) [m] (>=0)
+  double max_range = 70.0;           ///< horizontal range beyond which points are ignored [m] (> min_range)
+  double angular_resolution = 0.5;   ///< width of a polar sector [deg] (0.05..10)
+  double range_resolution = 0.2;     ///< length of a range bin of the ground estimate [m] (>0)
+  double max_ground_slope = 0.15;    ///< largest ground gradient along a sector [m/m] (>=0)
+  double ground_tolerance = 0.15;    ///< ground step allowed between consecutive ground bins [m] (>=0)
+  double min_obstacle_height = 0.3;  ///< obstacle points start this far above the ground [m] (>0)
+  double max_obstacle_height = 2.5;  ///< points higher above the ground are overhangs, ignored [m]
+  double p_occupied = 0.95;          ///< P(occupied) at an obstacle hit (0.5, 1)
+  double p_free = 0.05;              ///< P(occupied) of a cell seen free (0, 0.5)
+  double range_sigma = 0.2;          ///< std-dev of the hit range, width of the occupied band [m] (>0)
+
+  /// @throws std::invalid_argument naming the first field out of its range.
+  void validate() const;
+};
+
+/// Counters of one scan.
+struct InverseSensorModelStats
+{
+  std::size_t points = 0;          ///< points in the view
+  std::size_t invalid_points = 0;  ///< NaN/Inf coordinates, dropped
+  std::size_t out_of_range = 0;    ///< outside [min_range, max_range] horizontally
+  std::size_t ground_points = 0;
+  std::size_t obstacle_points = 0;
+  std::size_t overhang_points = 0;  ///< above max_obstacle_height over the ground
+  std::size_t occupied_cells = 0;   ///< cells holding obstacle points
+};
+
+/// Computes, for every cell of a grid, the probability p_o that the cell is occupied given one
+/// scan. Keeps its buffers between scans (no allocation in steady state). Not thread-safe.
+class InverseSensorModel
+{
+public:
+  /// @throws std::invalid_argument when `config` is invalid.
+  explicit InverseSensorModel(const InverseSensorModelConfig& config);
+
+  const InverseSensorModelConfig& config() const { return config_; }
+
+  /// Evaluates the scan `cloud` (sensor frame) taken at pose `world_from_sensor` (fixed frame
+  /// <- sensor) on `grid`. Writes one p_o in [0, 1] per cell to `occupancy` (resized; 0.5 =
+  /// no information) and returns the counters.
+  InverseSensorModelStats compute(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
+                                  const GridGeometry& grid, std::vector<float>& occupancy);
+
+  /// Ground height estimate of the last scan at horizontal range `range` [m] in the sector of
+  /// the fixed-frame azimuth `azimuth` [rad], relative to the sensor origin [m].
+  float groundHeight(double azimuth, double range) const;
+
+private:
+  int sectorOf(float dx, float dy) const;
+
+  InverseSensorModelConfig config_;
+  int sectors_ = 0;
+  int range_bins_ = 0;
+  float sectors_per_rad_ = 0.0F;
+  std::vector<float> bin_min_z_;         // per (sector, range bin): lowest z relative to the sensor
+  std::vector<float> ground_z_;          // per (sector, range bin): ground estimate
+  std::vector<float> first_hit_;         // per sector: range of the nearest obstacle point
+  std::vector<float> farthest_return_;   // per sector: range of the farthest valid point
+  std::vector<std::int32_t> point_bin_;  // per point: sector * range_bins + bin, -1 when dropped
+  std::vector<float> point_dz_;          // per point: z relative to the sensor, world-aligned
+  std::vector<float> point_x_;           // per point: x relative to the sensor, world-aligned
+  std::vector<float> point_y_;
+  std::vector<std::uint8_t> cell_hit_;  // per cell: holds obstacle points
+};
+
+/// atan2 with |error| < 1e-5 rad, branch-light (used for points and cells alike so that they
+/// fall in consistent sectors). Result in (-pi, pi].
+float fastAtan2(float y, float x);
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,189 @@
+// The four stages (dynamic grid, detector, grid projection, fusion) off line: fed with the
+// messages of a bag in time order, without roscore, through the same core code and the same
+// ROS-layer glue as the nodelets, deterministically. run_pipeline is a thin tool around it.
+#pragma once
+
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2/buffer_core.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/Detection2DArray.h"
+#include "grid_vision_fusion/DynamicGrid.h"
+#include "grid_vision_fusion/ProjectedGrid.h"
+#include "grid_vision_fusion/detection/detection_replay.h"
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
+#include "grid_vision_fusion/ros/params.h"
+#include "grid_vision_fusion/ros/stages.h"
+
+namespace grid_vision_fusion
+{
+/// Everything the four stages are configured with: what the four nodelets read from their
+/// parameters (config/dynamic_grid.yaml, yolo_detector.yaml, grid_projection.yaml, fusion.yaml).
+struct PipelineConfig
+{
+  DynamicGridConfig grid;
+  DynamicGridNodeOptions grid_node;
+  std::string backend = "opencv_dnn";  ///< detector backend: "opencv_dnn" or "replay"
+  YoloDetectorConfig yolo;             ///< used with opencv_dnn
+  DetectionReplayConfig replay;        ///< used with replay
+  GridProjectionConfig projection;
+  GridProjectionNodeOptions projection_node;
+  FusionConfig fusion;
+  /// How long (bag time) a sensor message may wait for the tf it needs before it is handled
+  /// anyway (and dropped by its stage if tf still cannot answer) [s], >= 0. The nodelets wait
+  /// for tf too (dynamic_grid through a tf message filter).
+  double max_tf_wait = 0.5;
+  /// Detection and projected-grid messages waiting for their partner (as the fusion nodelet's
+  /// synchroniser queue), >= 1.
+  int fusion_queue_size = 10;
+};
+
+/// The PipelineConfig of the four parameter sources, read by the very functions the nodelets
+/// use. @throws std::invalid_argument naming the parameter at fault.
+PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSource& detector,
+                                        const ParamSource& projection, const ParamSource& fusion);
+
+/// Per-stage wall times [ms] of every processed message and counters.
+struct PipelineStats
+{
+  std::vector<double> grid_ms;        ///< per cloud
+  std::vector<double> detector_ms;    ///< per image
+  std::vector<double> projection_ms;  ///< per camera_info
+  std::vector<double> fusion_ms;      ///< per fused pair
+  std::size_t clouds = 0, images = 0, camera_infos = 0;
+  std::size_t grids = 0, detections = 0, projections = 0, objects = 0;
+  std::size_t grid_drops = 0;        ///< clouds without tf / with unusable fields
+  std::size_t detector_drops = 0;    ///< images that could not be processed
+  std::size_t projection_drops = 0;  ///< camera_infos without grid / tf / usable camera
+  std::size_t fusion_drops = 0;      ///< pairs refused, or an output without partner
+  std::size_t grid_resets = 0;
+  std::vector<std::string> warnings;  ///< the first few distinct reasons of drops (for the user)
+};
+
+/// Where the outputs go; each may be empty.
+struct PipelineOutputs
+{
+  std::function<void(const DetectedObjectArray::ConstPtr&)> objects;
+  std::function<void(const DynamicGrid::ConstPtr&)> grid;  ///< only when set: the grid messages are built
+  std::function<void(const ProjectedGrid::ConstPtr&)> projected_grid;
+  std::function<void(const Detection2DArray::ConstPtr&)> detections;
+};
+
+/// The four stages. Feed the messages in bag order (add*()); a sensor message is processed when
+/// the messages read so far say all earlier ones are in, and tf can answer for it (or it has
+/// waited max_tf_wait); call finish() at the end. Order of processing: by header stamp, and at
+/// equal stamps clouds first, then images, then camera_infos, so that a camera_info is
+/// projected with the grid of the latest scan at or before its stamp. Not thread-safe.
+class Pipeline
+{
+public:
+  /// @throws std::invalid_argument for an invalid configuration; what the detector throws while
+  /// loading its model.
+  Pipeline(const PipelineConfig& config, PipelineOutputs outputs);
+  ~Pipeline();
+
+  /// /tf (is_static false) or /tf_static messages.
+  void addTf(const tf2_msgs::TFMessage& msg, bool is_static);
+  void addCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void addImage(const sensor_msgs::Image::ConstPtr& msg);
+  void addCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& msg);
+  /// The bag time of the message just read (non-decreasing): releases what may be processed.
+  void advanceTo(const ros::Time& bag_time);
+  /// Processes every waiting message.
+  void finish();
+
+  const PipelineStats& stats() const { return stats_; }
+  const PipelineConfig& config() const { return config_; }
+  /// Warnings of the detector while loading (backend fallbacks).
+  std::vector<std::string> detectorWarnings() const;
+
+private:
+  enum class Kind
+  {
+    kCloud = 0,
+    kImage = 1,
+    kCameraInfo = 2
+  };
+  struct Pending
+  {
+    ros::Time stamp;
+    Kind kind;
+    std::uint64_t order;  ///< arrival order, the last tie breaker
+    sensor_msgs::PointCloud2::ConstPtr cloud;
+    sensor_msgs::Image::ConstPtr image;
+    sensor_msgs::CameraInfo::ConstPtr info;
+  };
+
+  void enqueue(Pending pending);
+  void release(bool everything);
+  bool tfReady(const Pending& pending) const;
+  void process(const Pending& pending);
+  void processCloud(const sensor_msgs::PointCloud2& msg);
+  void processImage(const sensor_msgs::Image::ConstPtr& msg);
+  void processCameraInfo(const sensor_msgs::CameraInfo& msg);
+  void tryFuse(const ros::Time& stamp);
+  void warn(const std::string& what);
+
+  PipelineConfig config_;
+  PipelineOutputs outputs_;
+  PipelineStats stats_;
+  tf2::BufferCore tf_;
+  std::unique_ptr<DynamicGridFilter> filter_;
+  std::unique_ptr<YoloDetector> detector_;
+  std::unique_ptr<DetectionReplay> replay_;
+  DynamicGrid::ConstPtr latest_grid_;
+  std::deque<Pending> queue_;  ///< sorted by (stamp, kind, order)
+  std::uint64_t arrivals_ = 0;
+  ros::Time bag_time_;
+  ros::Time latest_tf_stamp_;
+  std::map<ros::Time, Detection2DArray::ConstPtr> detections_;
+  std::map<ros::Time, ProjectedGrid::ConstPtr> projections_;
+};
+
+/// Topic names of the inputs (kitti2bag's by default).
+struct PipelineTopics
+{
+  std::string points = "/kitti/velo/pointcloud";
+  std::string image = "/kitti/camera_color_left/image_raw";
+  std::string camera_info = "/kitti/camera_color_left/camera_info";
+  std::string tf = "/tf";
+  std::string tf_static = "/tf_static";
+};
+
+/// What runPipelineOnBag() did.
+struct BagRunSummary
+{
+  std::size_t messages_read = 0;
+  std::size_t frames = 0;        ///< images read
+  double bag_duration_s = 0.0;   ///< from the first to the last message read
+  double wall_s = 0.0;           ///< wall time of the whole run (reading and writing included)
+  std::vector<double> rss_mb;    ///< resident memory after every image [MiB]
+};
+
+/// Reads `input_bag` in time order, feeds `pipeline`, calls `progress(done, total)` per message
+/// (may be empty). @throws rosbag::BagException (unreadable bag), std::runtime_error when none
+/// of the input topics is in the bag.
+BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag, const PipelineTopics& topics,
+                               const std::function<void(std::size_t, std::size_t)>& progress = nullptr);
+
+/// Resident memory of this process now [MiB] (from /proc/self/statm; 0 when unknown).
+double residentMemoryMiB();
+/// Peak resident memory of this process so far [MiB] (getrusage).
+double peakResidentMemoryMiB();
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,60 @@
+// Writes a synthetic scenario as a KITTI raw drive: the calibration files of the recording day,
+// image_02 (PNG, rendered), velodyne_points (.bin, ray cast), oxts, timestamps,
+// tracklet_labels.xml, plus per-frame KITTI object labels (label_2) of the rendered boxes.
+// The sensors sit where they sit on the KITTI vehicle (the day's calibration), so every tool that
+// reads KITTI raw data reads a synthetic drive unchanged, and the ground truth is exact.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "grid_vision_fusion/kitti/kitti_calibration.h"
+#include "grid_vision_fusion/simulation/synthetic_scenario.h"
+
+namespace grid_vision_fusion
+{
+/// Where and how a synthetic drive is written.
+struct SyntheticDriveOptions
+{
+  std::string output_root;           ///< the drive goes to <root>/<date>/<date>_drive_<NNNN>_sync
+  std::string calibration_dir;       ///< folder with calib_cam_to_cam/velo_to_cam/imu_to_velo.txt
+  std::string date = "2011_09_26";   ///< recording day: folder names and first time stamp
+  int drive_number = 9001;           ///< synthetic drives count from 9001, real ones stay below
+  int max_frames = -1;               ///< write only the first N frames (< 0: all)
+  std::string start_time = "2011-09-26 13:00:00.000000000";  ///< stamp of frame 0 (UTC)
+  double origin_lat_deg = 49.011;    ///< world origin for the OXTS records (Karlsruhe)
+  double origin_lon_deg = 8.4237;
+  double origin_alt_m = 116.0;
+  double lidar_height_m = 1.73;      ///< height of the velodyne above the road (KITTI)
+
+  /// @throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+/// What writeSyntheticDrive() produced.
+struct SyntheticDriveSummary
+{
+  std::string drive_dir;        ///< the *_sync folder
+  int frames = 0;
+  std::size_t lidar_points = 0; ///< over all scans
+  std::size_t labels = 0;       ///< label_2 lines over all frames
+};
+
+/// A scenario that replays a recorded KITTI raw drive (its oxts/ and tracklet_labels.xml): the
+/// ego follows the OXTS poses relative to the first frame, flattened onto the ground plane (x, y,
+/// yaw); every tracklet becomes an actor of its type and size that follows its recorded poses
+/// while it is labelled and is absent otherwise. Frame i is at t = i / base.frame_rate_hz. Road,
+/// scenery, lidar settings, seed and frame rate come from `base`; the duration covers the
+/// recorded frames. @throws std::runtime_error naming the file at fault.
+SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const KittiRawCalibration& calibration,
+                                        const SyntheticScenario& base);
+
+/// The standard 30-line OXTS dataformat.txt of the KITTI raw data.
+std::string oxtsDataFormat();
+
+/// Writes the drive. `progress(done, total)` is called after every frame.
+/// @throws std::runtime_error naming a file that cannot be read or written.
+SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
+                                          const std::function<void(int, int)>& progress = nullptr);
+
+}  // namespace grid_vision_fusion

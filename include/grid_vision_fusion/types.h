@@ -1,0 +1,92 @@
+// The types the on-vehicle stages share: detector boxes, motion and cell states, and the view of
+// projected grid points that the projection produces and the fusion consumes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace grid_vision_fusion
+{
+/// Motion class of an object; the values equal the DetectedObject.msg MOTION_* constants.
+enum class Motion : std::uint8_t
+{
+  kUnknown = 0,
+  kStatic = 1,
+  kDynamic = 2,
+};
+
+/// "static", "dynamic" or "unknown".
+inline std::string toString(Motion motion)
+{
+  switch (motion)
+  {
+    case Motion::kStatic:
+      return "static";
+    case Motion::kDynamic:
+      return "dynamic";
+    case Motion::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+/// State of a projected grid cell; the values equal the ProjectedGrid.msg constants.
+enum class CellState : std::uint8_t
+{
+  kStatic = 1,
+  kDynamic = 2,
+};
+
+/// An axis-aligned detector box in pixels (x right, y down).
+struct BoundingBox
+{
+  float x_min = 0.F;
+  float y_min = 0.F;
+  float x_max = 0.F;
+  float y_max = 0.F;
+
+  float height() const { return y_max - y_min; }
+};
+
+/// One detector output.
+struct Detection
+{
+  std::uint32_t class_id = 0;
+  std::string label;
+  float score = 0.F;
+  BoundingBox box;
+};
+
+/// Read-only view of the projected grid points, structure of arrays, all of length `size`.
+/// It borrows the arrays (e.g. those of a ProjectedGrid message) and copies nothing.
+struct ProjectedPointsView
+{
+  std::size_t size = 0;
+  const float* u = nullptr;      ///< pixel column [px]
+  const float* v = nullptr;      ///< pixel row [px]
+  const float* x = nullptr;      ///< cell position x [m], grid frame
+  const float* y = nullptr;      ///< cell position y [m], grid frame
+  const float* vx = nullptr;     ///< cell velocity x [m/s], grid frame
+  const float* vy = nullptr;     ///< cell velocity y [m/s], grid frame
+  const std::uint8_t* state = nullptr;  ///< CellState values
+};
+
+/// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and
+/// state (uint8 vector) of equal length, e.g. ProjectedPoints or a ProjectedGrid message.
+template <typename PointArrays>
+ProjectedPointsView pointsViewOf(const PointArrays& arrays)
+{
+  ProjectedPointsView view;
+  view.size = arrays.u.size();
+  view.u = arrays.u.data();
+  view.v = arrays.v.data();
+  view.x = arrays.x.data();
+  view.y = arrays.y.data();
+  view.vx = arrays.vx.data();
+  view.vy = arrays.vy.data();
+  view.state = arrays.state.data();
+  return view;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,123 @@
+#include "grid_vision_fusion/detection/kitti_labels.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr std::size_t kLabelFields = 15;
+
+const char* const kFieldNames[] = {"type",   "truncated", "occluded", "alpha",  "left",  "top",
+                                   "right",  "bottom",    "height",   "width",  "length", "x",
+                                   "y",      "z",         "rotation_y", "score"};
+
+[[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& what)
+{
+  throw KittiLabelError(source + ":" + std::to_string(line) + ": " + what);
+}
+
+float toFloat(const std::string& token, std::size_t field, const std::string& source, std::size_t line)
+{
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(value))
+  {
+    fail(source, line, std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
+                           ") is not a finite number: '" + token + "'");
+  }
+  return static_cast<float>(value);
+}
+
+int toInt(const std::string& token, std::size_t field, const std::string& source, std::size_t line)
+{
+  errno = 0;
+  char* end = nullptr;
+  const long value = std::strtol(token.c_str(), &end, 10);
+  if (end == token.c_str() || *end != '\0' || errno == ERANGE)
+  {
+    fail(source, line, std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
+                           ") is not an integer: '" + token + "'");
+  }
+  return static_cast<int>(value);
+}
+
+}  // namespace
+
+std::vector<std::string> splitFields(const std::string& line)
+{
+  std::istringstream fields(line);
+  std::vector<std::string> tokens;
+  for (std::string token; fields >> token;)
+  {
+    tokens.push_back(token);
+  }
+  return tokens;
+}
+
+std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::string& source_name)
+{
+  std::vector<KittiObjectLabel> labels;
+  std::string text;
+  std::size_t line = 0;
+  while (std::getline(input, text))
+  {
+    ++line;
+    const std::vector<std::string> tokens = splitFields(text);
+    if (tokens.empty())
+    {
+      continue;
+    }
+    if (tokens.size() != kLabelFields && tokens.size() != kLabelFields + 1)
+    {
+      fail(source_name, line,
+           "expected 15 fields (type truncated occluded alpha left top right bottom h w l x y z ry) "
+           "or 16 with a score, got " + std::to_string(tokens.size()));
+    }
+    KittiObjectLabel label;
+    label.type = tokens[0];
+    label.truncated = toFloat(tokens[1], 1, source_name, line);
+    label.occluded = toInt(tokens[2], 2, source_name, line);
+    float* const numbers[] = {&label.alpha,  &label.left,   &label.top, &label.right, &label.bottom,
+                              &label.height, &label.width,  &label.length, &label.x,  &label.y,
+                              &label.z,      &label.rotation_y};
+    for (std::size_t i = 0; i < 12; ++i)
+    {
+      *numbers[i] = toFloat(tokens[3 + i], 3 + i, source_name, line);
+    }
+    if (tokens.size() == kLabelFields + 1)
+    {
+      label.score = toFloat(tokens[15], 15, source_name, line);
+    }
+    if (label.right < label.left || label.bottom < label.top)
+    {
+      std::ostringstream what;
+      what << "box (left " << label.left << ", top " << label.top << ", right " << label.right << ", bottom "
+           << label.bottom << ") has right < left or bottom < top";
+      fail(source_name, line, what.str());
+    }
+    labels.push_back(std::move(label));
+  }
+  if (input.bad())
+  {
+    throw KittiLabelError(source_name + ": read error after line " + std::to_string(line));
+  }
+  return labels;
+}
+
+std::vector<KittiObjectLabel> readKittiLabels(const std::string& path)
+{
+  std::ifstream file(path);
+  if (!file)
+  {
+    throw KittiLabelError(path + ": cannot open the KITTI label file");
+  }
+  return parseKittiLabels(file, path);
+}
+
+}  // namespace grid_vision_fusion

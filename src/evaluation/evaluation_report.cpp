@@ -1,0 +1,356 @@
+#include "grid_vision_fusion/evaluation/evaluation_report.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+namespace fs = std::filesystem;
+
+const cv::Size kPlotSize(640, 480);
+const cv::Rect kPlotArea(70, 50, 540, 360);
+const cv::Scalar kBlack(0, 0, 0);
+const cv::Scalar kGridGrey(220, 220, 220);
+const cv::Scalar kCurveBlue(200, 80, 0);
+const cv::Scalar kMarkRed(0, 0, 220);
+
+std::string number(double value, int decimals = 6)
+{
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+std::string jsonString(const std::string& text)
+{
+  std::string out = "\"";
+  for (char c : text)
+  {
+    switch (c)
+    {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20)
+        {
+          char escaped[8];
+          std::snprintf(escaped, sizeof(escaped), "\\u%04x", c);
+          out += escaped;
+        }
+        else
+        {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string jsonArray(const std::vector<double>& values)
+{
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i)
+  {
+    out += (i ? ", " : "") + number(values[i]);
+  }
+  return out + "]";
+}
+
+std::string jsonStats(const ErrorStats& s)
+{
+  return "{\"count\": " + std::to_string(s.count) + ", \"median\": " + number(s.median) +
+         ", \"mean\": " + number(s.mean) + ", \"p90\": " + number(s.p90) + "}";
+}
+
+std::string percent(double fraction) { return number(100.0 * fraction, 1); }
+
+void writeFile(const fs::path& path, const std::string& content)
+{
+  std::ofstream file(path);
+  file << content;
+  if (!file)
+  {
+    throw std::runtime_error("cannot write " + path.string());
+  }
+}
+
+void writePng(const fs::path& path, const cv::Mat& image)
+{
+  if (!cv::imwrite(path.string(), image))
+  {
+    throw std::runtime_error("cannot write " + path.string());
+  }
+}
+
+/// Canvas with a framed plot area, a title and axis labels.
+cv::Mat plotCanvas(const std::string& title, const std::string& x_label, const std::string& y_label)
+{
+  cv::Mat canvas(kPlotSize, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int i = 1; i < 10; ++i)
+  {
+    const int x = kPlotArea.x + kPlotArea.width * i / 10;
+    const int y = kPlotArea.y + kPlotArea.height * i / 10;
+    cv::line(canvas, {x, kPlotArea.y}, {x, kPlotArea.br().y}, kGridGrey);
+    cv::line(canvas, {kPlotArea.x, y}, {kPlotArea.br().x, y}, kGridGrey);
+  }
+  cv::rectangle(canvas, kPlotArea, kBlack, 1);
+  cv::putText(canvas, title, {kPlotArea.x, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, kBlack, 1, cv::LINE_AA);
+  cv::putText(canvas, x_label, {kPlotArea.x + kPlotArea.width / 2 - 40, kPlotSize.height - 20},
+              cv::FONT_HERSHEY_SIMPLEX, 0.5, kBlack, 1, cv::LINE_AA);
+  cv::putText(canvas, y_label, {5, kPlotArea.y - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kBlack, 1, cv::LINE_AA);
+  return canvas;
+}
+
+void axisTicks(cv::Mat& canvas, double x_max, double y_max, int x_decimals, int y_decimals)
+{
+  for (int i = 0; i <= 10; i += 2)
+  {
+    const int x = kPlotArea.x + kPlotArea.width * i / 10;
+    const int y = kPlotArea.br().y - kPlotArea.height * i / 10;
+    cv::putText(canvas, number(x_max * i / 10.0, x_decimals), {x - 12, kPlotArea.br().y + 18},
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1, cv::LINE_AA);
+    cv::putText(canvas, number(y_max * i / 10.0, y_decimals), {20, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1,
+                cv::LINE_AA);
+  }
+}
+
+cv::Point toPixel(double x, double y, double x_max, double y_max)
+{
+  return {kPlotArea.x + static_cast<int>(std::lround(x / x_max * kPlotArea.width)),
+          kPlotArea.br().y - static_cast<int>(std::lround(y / y_max * kPlotArea.height))};
+}
+
+std::string fileSafe(const std::string& name)
+{
+  std::string out = name;
+  for (char& c : out)
+  {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-')
+    {
+      c = '_';
+    }
+  }
+  return out;
+}
+}  // namespace
+
+std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config)
+{
+  std::ostringstream out;
+  out << "{\n  \"config\": {\"iou_threshold\": " << number(config.iou_threshold)
+      << ", \"max_longitudinal_m\": " << number(config.max_longitudinal_m)
+      << ", \"motion_classes\": " << (config.motion_classes ? "true" : "false") << "},\n";
+  out << "  \"mAP\": " << number(result.mean_average_precision) << ",\n  \"classes\": [";
+  for (std::size_t i = 0; i < result.classes.size(); ++i)
+  {
+    const ClassMetrics& m = result.classes[i];
+    out << (i ? "," : "") << "\n    {\"name\": " << jsonString(m.name) << ", \"ground_truth\": " << m.ground_truth
+        << ", \"detections\": " << m.detections << ", \"true_positives\": " << m.true_positives
+        << ", \"false_positives\": " << m.false_positives << ", \"precision\": " << number(m.precision)
+        << ", \"recall\": " << number(m.recall) << ", \"f1\": " << number(m.f1)
+        << ", \"ap\": " << number(m.average_precision) << ",\n     \"recall_curve\": " << jsonArray(m.recall_curve)
+        << ",\n     \"precision_curve\": " << jsonArray(m.precision_curve) << "}";
+  }
+  out << "\n  ],\n  \"motion_confusion\": {\"rows\": \"truth\", \"columns\": \"predicted\", "
+         "\"labels\": [\"unknown\", \"static\", \"dynamic\"], \"counts\": [";
+  for (std::size_t t = 0; t < 3; ++t)
+  {
+    out << (t ? ", " : "") << "[" << result.motion_confusion[t][0] << ", " << result.motion_confusion[t][1] << ", "
+        << result.motion_confusion[t][2] << "]";
+  }
+  out << "]},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
+      << ",\n  \"speed_error_mps\": " << jsonStats(result.speed_error_mps)
+      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad) << "\n}\n";
+  return out.str();
+}
+
+std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfig& config)
+{
+  std::ostringstream out;
+  out << "# Evaluation report\n\nObjects up to " << number(config.max_longitudinal_m, 1)
+      << " m ahead; a true positive needs IoU >= " << number(config.iou_threshold, 2)
+      << " (+1 pixel convention) with a ground-truth box of the same class.\n\n";
+  out << "## Table I — precision, recall and F1 per class [%]\n\n"
+      << "| Class | Precision | Recall | F1-score | GT | TP | FP |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& m : result.classes)
+  {
+    out << "| " << m.name << " | " << percent(m.precision) << " | " << percent(m.recall) << " | " << percent(m.f1)
+        << " | " << m.ground_truth << " | " << m.true_positives << " | " << m.false_positives << " |\n";
+  }
+  out << "\n## Table II — average precision (VOC2012 all-point) [%]\n\n| Class | AP |\n|---|---|\n";
+  for (const auto& m : result.classes)
+  {
+    out << "| " << m.name << " | " << percent(m.average_precision) << (m.ground_truth ? "" : " (not in GT)")
+        << " |\n";
+  }
+  out << "| **mAP** | **" << percent(result.mean_average_precision) << "** |\n";
+  static const char* const kMotion[] = {"unknown", "static", "dynamic"};
+  out << "\n## Motion classification (objects matched by class and IoU)\n\n"
+      << "| truth \\ predicted | unknown | static | dynamic |\n|---|---|---|---|\n";
+  for (std::size_t t = 0; t < 3; ++t)
+  {
+    out << "| " << kMotion[t] << " | " << result.motion_confusion[t][0] << " | " << result.motion_confusion[t][1]
+        << " | " << result.motion_confusion[t][2] << " |\n";
+  }
+  out << "\n## State errors of matched objects\n\n| quantity | count | median | mean | 90th percentile |\n"
+      << "|---|---|---|---|---|\n";
+  auto row = [&](const char* name, const ErrorStats& s, double scale, int decimals) {
+    out << "| " << name << " | " << s.count << " | " << number(s.median * scale, decimals) << " | "
+        << number(s.mean * scale, decimals) << " | " << number(s.p90 * scale, decimals) << " |\n";
+  };
+  row("position [m]", result.position_error_m, 1.0, 2);
+  row("speed [m/s]", result.speed_error_mps, 1.0, 2);
+  row("heading [deg] (dynamic only)", result.heading_error_rad, 180.0 / M_PI, 1);
+  return out.str();
+}
+
+void writeCartuchoFolders(const std::string& dir, const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const EvaluationConfig& config)
+{
+  std::map<std::string, std::string> gt_lines, det_lines;
+  auto box = [](const BoundingBox& b) {
+    return number(b.x_min, 2) + " " + number(b.y_min, 2) + " " + number(b.x_max, 2) + " " + number(b.y_max, 2);
+  };
+  for (const auto& o : ground_truth)
+  {
+    std::string& lines = gt_lines[o.frame];
+    det_lines[o.frame];
+    if (o.longitudinal_m <= config.max_longitudinal_m)
+    {
+      lines += evaluationClass(o.label, o.motion, config.motion_classes) + " " + box(o.box) +
+               (o.difficult ? " difficult" : "") + "\n";
+    }
+  }
+  for (const auto& o : detections)
+  {
+    std::string& lines = det_lines[o.frame];
+    gt_lines[o.frame];
+    if (o.longitudinal_m <= config.max_longitudinal_m)
+    {
+      lines += evaluationClass(o.label, o.motion, config.motion_classes) + " " + number(o.score) + " " +
+               box(o.box) + "\n";
+    }
+  }
+  const fs::path gt_dir = fs::path(dir) / "ground-truth";
+  const fs::path det_dir = fs::path(dir) / "detection-results";
+  fs::create_directories(gt_dir);
+  fs::create_directories(det_dir);
+  for (const auto& [frame, lines] : gt_lines)
+  {
+    writeFile(gt_dir / (frame + ".txt"), lines);
+  }
+  for (const auto& [frame, lines] : det_lines)
+  {
+    writeFile(det_dir / (frame + ".txt"), lines);
+  }
+}
+
+cv::Mat drawPrCurve(const ClassMetrics& metrics)
+{
+  cv::Mat canvas = plotCanvas(metrics.name + ": AP = " + number(100.0 * metrics.average_precision, 1) + " %",
+                              "recall", "precision");
+  axisTicks(canvas, 1.0, 1.0, 1, 1);
+  std::vector<cv::Point> curve{toPixel(0.0, metrics.precision_curve.empty() ? 0.0 : metrics.precision_curve[0], 1, 1)};
+  for (std::size_t i = 0; i < metrics.recall_curve.size(); ++i)
+  {
+    curve.push_back(toPixel(metrics.recall_curve[i], metrics.precision_curve[i], 1.0, 1.0));
+  }
+  cv::polylines(canvas, curve, false, kCurveBlue, 2, cv::LINE_AA);
+  return canvas;
+}
+
+cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const std::string& unit, int bins)
+{
+  if (bins < 1)
+  {
+    throw std::invalid_argument("a histogram needs at least one bin");
+  }
+  cv::Mat canvas = plotCanvas(title + " (n = " + std::to_string(stats.count) + ")", unit, "count");
+  const double x_max = stats.values.empty() ? 1.0 : std::max(stats.values.back(), 1e-9);
+  std::vector<int> counts(static_cast<std::size_t>(bins), 0);
+  for (double v : stats.values)
+  {
+    const auto bin = std::min(static_cast<std::size_t>(v / x_max * bins), counts.size() - 1);
+    ++counts[bin];
+  }
+  const double y_max = std::ceil(std::max(1, *std::max_element(counts.begin(), counts.end())) * 1.1);
+  axisTicks(canvas, x_max, y_max, 2, y_max < 10.0 ? 1 : 0);
+  if (stats.count == 0)
+  {
+    cv::putText(canvas, "no data", {kPlotArea.x + kPlotArea.width / 2 - 40, kPlotArea.y + kPlotArea.height / 2},
+                cv::FONT_HERSHEY_SIMPLEX, 0.8, kMarkRed, 2, cv::LINE_AA);
+  }
+  for (int b = 0; b < bins; ++b)
+  {
+    if (counts[static_cast<std::size_t>(b)] == 0)
+    {
+      continue;
+    }
+    const cv::Point top_left = toPixel(x_max * b / bins, counts[static_cast<std::size_t>(b)], x_max, y_max);
+    const cv::Point bottom_right = toPixel(x_max * (b + 1) / bins, 0.0, x_max, y_max);
+    cv::rectangle(canvas, top_left, bottom_right - cv::Point(1, 0), kCurveBlue, cv::FILLED);
+  }
+  if (stats.count > 0)
+  {
+    for (const auto& [value, name] : {std::make_pair(stats.median, "median"), std::make_pair(stats.p90, "p90")})
+    {
+      const cv::Point bottom = toPixel(value, 0.0, x_max, y_max);
+      cv::line(canvas, bottom, {bottom.x, kPlotArea.y}, kMarkRed, 1, cv::LINE_AA);
+      cv::putText(canvas, std::string(name) + " " + number(value, 2), {bottom.x + 4, kPlotArea.y + 15},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.45, kMarkRed, 1, cv::LINE_AA);
+    }
+  }
+  return canvas;
+}
+
+void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result, const EvaluationConfig& config,
+                            const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections)
+{
+  const fs::path out(dir);
+  std::error_code error;
+  fs::create_directories(out, error);
+  if (error)
+  {
+    throw std::runtime_error("cannot create output folder " + dir + ": " + error.message());
+  }
+  writeFile(out / "metrics.json", metricsJson(result, config));
+  writeFile(out / "report.md", reportMarkdown(result, config));
+  writeCartuchoFolders(dir, ground_truth, detections, config);
+  for (const auto& m : result.classes)
+  {
+    writePng(out / ("pr_" + fileSafe(m.name) + ".png"), drawPrCurve(m));
+  }
+  writePng(out / "hist_position.png", drawHistogram(result.position_error_m, "position error", "m"));
+  writePng(out / "hist_speed.png", drawHistogram(result.speed_error_mps, "speed error", "m/s"));
+  ErrorStats heading_deg = result.heading_error_rad;
+  for (double* v : {&heading_deg.median, &heading_deg.mean, &heading_deg.p90})
+  {
+    *v *= 180.0 / M_PI;
+  }
+  for (double& v : heading_deg.values)
+  {
+    v *= 180.0 / M_PI;
+  }
+  writePng(out / "hist_heading.png", drawHistogram(heading_deg, "heading error (dynamic)", "deg"));
+}
+
+}  // namespace grid_vision_fusion

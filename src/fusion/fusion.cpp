@@ -1,0 +1,308 @@
+#include "grid_vision_fusion/fusion/fusion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kMaxBandFraction = 10.0;
+constexpr float kBoxTolerancePx = 1.F;
+
+bool isFinite(float value) { return std::isfinite(value); }
+
+bool validState(std::uint8_t state)
+{
+  return state == static_cast<std::uint8_t>(CellState::kStatic) ||
+         state == static_cast<std::uint8_t>(CellState::kDynamic);
+}
+
+/// Whether point i can take part in the fusion at all.
+bool validPoint(const ProjectedPointsView& points, std::size_t i)
+{
+  if (!isFinite(points.u[i]) || !isFinite(points.v[i]) || !isFinite(points.x[i]) ||
+      !isFinite(points.y[i]) || !validState(points.state[i]))
+  {
+    return false;
+  }
+  const bool dynamic = points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic);
+  return !dynamic || (isFinite(points.vx[i]) && isFinite(points.vy[i]));
+}
+
+/// Detection indices ordered for exclusive assignment: nearest first (largest y_max), then
+/// higher score, then earlier detection.
+std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
+{
+  std::vector<std::size_t> order(detections.size());
+  std::iota(order.begin(), order.end(), 0U);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto& da = detections[a];
+    const auto& db = detections[b];
+    if (da.box.y_max != db.box.y_max)
+    {
+      return da.box.y_max > db.box.y_max;
+    }
+    return da.score > db.score;
+  });
+  return order;
+}
+
+FusedObject pointwiseFeatures(std::size_t detection_index, const std::vector<std::size_t>& members,
+                              const ProjectedPointsView& points, const FusionConfig& config)
+{
+  FusedObject object;
+  object.detection_index = detection_index;
+  std::vector<double> xs, ys, vxs, vys;
+  xs.reserve(members.size());
+  ys.reserve(members.size());
+  for (std::size_t i : members)
+  {
+    xs.push_back(points.x[i]);
+    ys.push_back(points.y[i]);
+    if (points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic))
+    {
+      ++object.dynamic_points;
+      vxs.push_back(points.vx[i]);
+      vys.push_back(points.vy[i]);
+    }
+    else
+    {
+      ++object.static_points;
+    }
+  }
+  object.x = median(xs);
+  object.y = median(ys);
+  object.motion = decideMotion(object.static_points, object.dynamic_points, config);
+  if (object.motion == Motion::kDynamic)
+  {
+    object.vx = median(vxs);
+    object.vy = median(vys);
+    object.heading = std::atan2(object.vy, object.vx);
+  }
+  return object;
+}
+}  // namespace
+
+TieRule tieRuleFromString(const std::string& name)
+{
+  if (name == "static")
+  {
+    return TieRule::kStatic;
+  }
+  if (name == "dynamic")
+  {
+    return TieRule::kDynamic;
+  }
+  if (name == "unknown")
+  {
+    return TieRule::kUnknown;
+  }
+  throw std::invalid_argument("tie_rule must be \"static\", \"dynamic\" or \"unknown\", got \"" +
+                              name + "\"");
+}
+
+std::string toString(TieRule rule)
+{
+  switch (rule)
+  {
+    case TieRule::kStatic:
+      return "static";
+    case TieRule::kDynamic:
+      return "dynamic";
+    case TieRule::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+void FusionConfig::validate() const
+{
+  auto check_fraction = [](const char* name, double value) {
+    if (!std::isfinite(value) || value < 0.0 || value > kMaxBandFraction)
+    {
+      std::ostringstream msg;
+      msg << name << " must be a fraction of the box height in [0, " << kMaxBandFraction
+          << "], got " << value;
+      throw std::invalid_argument(msg.str());
+    }
+  };
+  check_fraction("band_above", band_above);
+  check_fraction("band_below", band_below);
+  if (min_points < 1)
+  {
+    throw std::invalid_argument("min_points must be >= 1, got " + std::to_string(min_points));
+  }
+}
+
+void ProjectedPoints::add(float pu, float pv, float px, float py, float pvx, float pvy, CellState s)
+{
+  u.push_back(pu);
+  v.push_back(pv);
+  x.push_back(px);
+  y.push_back(py);
+  vx.push_back(pvx);
+  vy.push_back(pvy);
+  state.push_back(static_cast<std::uint8_t>(s));
+}
+
+ProjectedPointsView ProjectedPoints::view() const
+{
+  return pointsViewOf(*this);
+}
+
+FusionRegion FusionRegion::fromBox(const BoundingBox& box, const FusionConfig& config)
+{
+  const double h = box.height();
+  FusionRegion region;
+  region.u_min = box.x_min;
+  region.u_max = box.x_max;
+  region.v_min = static_cast<float>(box.y_max - config.band_above * h);
+  region.v_max = static_cast<float>(box.y_max + config.band_below * h);
+  return region;
+}
+
+double FusedObject::speed() const { return std::hypot(vx, vy); }
+
+double median(std::vector<double>& values)
+{
+  if (values.empty())
+  {
+    throw std::invalid_argument("median of an empty set");
+  }
+  const std::size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
+  const double upper = values[mid];
+  if (values.size() % 2 == 1)
+  {
+    return upper;
+  }
+  const double lower = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid));
+  return 0.5 * (lower + upper);
+}
+
+Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points,
+                    const FusionConfig& config)
+{
+  Motion motion = Motion::kUnknown;
+  if (static_points > dynamic_points)
+  {
+    motion = Motion::kStatic;
+  }
+  else if (dynamic_points > static_points)
+  {
+    motion = Motion::kDynamic;
+  }
+  else if (static_points == 0)
+  {
+    return Motion::kUnknown;
+  }
+  else
+  {
+    motion = config.tie_rule == TieRule::kStatic    ? Motion::kStatic
+             : config.tie_rule == TieRule::kDynamic ? Motion::kDynamic
+                                                    : Motion::kUnknown;
+  }
+  const std::uint32_t winner = std::max(static_points, dynamic_points);
+  if (winner < static_cast<std::uint32_t>(config.min_points))
+  {
+    return Motion::kUnknown;
+  }
+  return motion;
+}
+
+FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
+                  const FusionConfig& config)
+{
+  FusionResult result;
+  std::vector<FusionRegion> regions;
+  regions.reserve(detections.size());
+  for (const auto& detection : detections)
+  {
+    regions.push_back(FusionRegion::fromBox(detection.box, config));
+  }
+
+  std::vector<std::vector<std::size_t>> members(detections.size());
+  const std::vector<std::size_t> order =
+      config.exclusive_assignment ? depthOrder(detections) : std::vector<std::size_t>{};
+  for (std::size_t i = 0; i < points.size; ++i)
+  {
+    if (!validPoint(points, i))
+    {
+      ++result.invalid_points;
+      continue;
+    }
+    if (config.exclusive_assignment)
+    {
+      for (std::size_t d : order)
+      {
+        if (regions[d].contains(points.u[i], points.v[i]))
+        {
+          members[d].push_back(i);
+          break;
+        }
+      }
+      continue;
+    }
+    for (std::size_t d = 0; d < regions.size(); ++d)
+    {
+      if (regions[d].contains(points.u[i], points.v[i]))
+      {
+        members[d].push_back(i);
+      }
+    }
+  }
+
+  for (std::size_t d = 0; d < detections.size(); ++d)
+  {
+    if (!members[d].empty())
+    {
+      result.objects.push_back(pointwiseFeatures(d, members[d], points, config));
+    }
+  }
+  return result;
+}
+
+std::string checkFusionInputs(const std::vector<Detection>& detections,
+                              std::uint32_t detections_width, std::uint32_t detections_height,
+                              std::uint32_t points_width, std::uint32_t points_height)
+{
+  std::ostringstream msg;
+  if (detections_width != points_width || detections_height != points_height)
+  {
+    msg << "image size mismatch: detections are for " << detections_width << "x"
+        << detections_height << ", projected grid for " << points_width << "x" << points_height;
+    return msg.str();
+  }
+  const float width = static_cast<float>(detections_width);
+  const float height = static_cast<float>(detections_height);
+  for (std::size_t i = 0; i < detections.size(); ++i)
+  {
+    const BoundingBox& b = detections[i].box;
+    msg << "detection " << i << " (\"" << detections[i].label << "\") box [" << b.x_min << ", "
+        << b.y_min << ", " << b.x_max << ", " << b.y_max << "] ";
+    if (!isFinite(b.x_min) || !isFinite(b.y_min) || !isFinite(b.x_max) || !isFinite(b.y_max))
+    {
+      msg << "has a non-finite coordinate";
+      return msg.str();
+    }
+    if (b.x_min > b.x_max || b.y_min > b.y_max)
+    {
+      msg << "has x_min > x_max or y_min > y_max";
+      return msg.str();
+    }
+    if (b.x_min < -kBoxTolerancePx || b.y_min < -kBoxTolerancePx ||
+        b.x_max > width + kBoxTolerancePx || b.y_max > height + kBoxTolerancePx)
+    {
+      msg << "lies outside the " << detections_width << "x" << detections_height << " image";
+      return msg.str();
+    }
+    msg.str("");
+  }
+  return {};
+}
+
+}  // namespace grid_vision_fusion

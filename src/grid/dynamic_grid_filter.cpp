@@ -1,0 +1,749 @@
+// CMCDOT-style dynamic occupancy grid filter (a reconstruction, see DESIGN.md "Grid filter"
+// and doc/grid_filter.md, whose equation numbers the comments below refer to).
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr int kNormalTableBits = 16;
+constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
+constexpr int kBucket = 8;  // vacated cells are bucketed in squares of kBucket x kBucket cells
+
+// Standard normal quantiles at the centres of 2^16 equal-probability slices: a 16-bit random
+// index gives a normal sample (tails cut at +-4.3 sigma), a deterministic and fast sampler.
+const std::vector<float>& normalTable()
+{
+  static const std::vector<float> table = []
+  {
+    std::vector<float> t(kNormalTableSize);
+    for (std::size_t i = 0; i < kNormalTableSize; ++i)
+    {
+      t[i] = static_cast<float>(inverseNormalCdf((static_cast<double>(i) + 0.5) / kNormalTableSize));
+    }
+    return t;
+  }();
+  return table;
+}
+
+void require(bool condition, const char* field, const std::string& what)
+{
+  if (!condition)
+  {
+    throw std::invalid_argument(std::string("DynamicGridConfig.") + field + " " + what);
+  }
+}
+
+void requireProbability(double value, const char* field)
+{
+  require(std::isfinite(value) && value >= 0.0 && value < 1.0, field, "must be in [0, 1)");
+}
+
+// Off-diagonal transition probabilities of one row scaled to dt (eq. 2): the probability of
+// leaving the state, q = sum(eps), becomes 1 - (1 - q)^(dt / T), shared in the same proportions.
+struct Row
+{
+  float stay = 1.0F;
+  std::array<float, 3> to{};
+};
+
+Row scaledRow(std::array<double, 3> eps, double dt, double period)
+{
+  Row row;
+  const double q = eps[0] + eps[1] + eps[2];
+  if (q <= 0.0 || dt <= 0.0)
+  {
+    return row;
+  }
+  const double q_dt = 1.0 - std::pow(1.0 - q, dt / period);
+  for (std::size_t k = 0; k < 3; ++k)
+  {
+    row.to[k] = static_cast<float>(eps[k] / q * q_dt);
+  }
+  row.stay = static_cast<float>(1.0 - q_dt);
+  return row;
+}
+}  // namespace
+
+double inverseNormalCdf(double p)
+{
+  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                             1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
+  static const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
+                             6.680131188771972e+01, -1.328068155288572e+01};
+  static const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
+                             -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
+  static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                             3.754408661907416e+00};
+  constexpr double kLow = 0.02425;
+  if (p <= 0.0 || p >= 1.0)
+  {
+    throw std::domain_error("inverseNormalCdf: p must be in (0, 1)");
+  }
+  if (p < kLow)
+  {
+    const double q = std::sqrt(-2.0 * std::log(p));
+    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+  }
+  if (p > 1.0 - kLow)
+  {
+    return -inverseNormalCdf(1.0 - p);
+  }
+  const double q = p - 0.5;
+  const double r = q * q;
+  return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
+}
+
+void DynamicGridConfig::validate() const
+{
+  require(width >= 8 && width <= 4000, "width", "must be in [8, 4000] cells");
+  require(height >= 8 && height <= 4000, "height", "must be in [8, 4000] cells");
+  require(std::isfinite(resolution) && resolution >= 0.01 && resolution <= 5.0, "resolution",
+          "must be in [0.01, 5] m");
+  require(std::isfinite(lookahead) && std::fabs(lookahead) <= 1e4, "lookahead", "must be finite [m]");
+  require(std::isfinite(max_time_gap) && max_time_gap > 0.0, "max_time_gap", "must be > 0 [s]");
+  require(std::isfinite(transition_period) && transition_period > 0.0, "transition_period",
+          "must be > 0 [s]");
+  requireProbability(eps_static_to_dynamic, "eps_static_to_dynamic");
+  requireProbability(eps_static_to_unknown, "eps_static_to_unknown");
+  requireProbability(eps_dynamic_to_static, "eps_dynamic_to_static");
+  requireProbability(eps_dynamic_to_unknown, "eps_dynamic_to_unknown");
+  requireProbability(eps_free_to_static, "eps_free_to_static");
+  requireProbability(eps_free_to_dynamic, "eps_free_to_dynamic");
+  requireProbability(eps_free_to_unknown, "eps_free_to_unknown");
+  requireProbability(eps_unknown_to_static, "eps_unknown_to_static");
+  requireProbability(eps_unknown_to_dynamic, "eps_unknown_to_dynamic");
+  requireProbability(eps_unknown_to_free, "eps_unknown_to_free");
+  require(eps_static_to_dynamic + eps_static_to_unknown < 1.0, "eps_static_to_*", "must sum to < 1");
+  require(eps_dynamic_to_static + eps_dynamic_to_unknown < 1.0, "eps_dynamic_to_*", "must sum to < 1");
+  require(eps_free_to_static + eps_free_to_dynamic + eps_free_to_unknown < 1.0, "eps_free_to_*",
+          "must sum to < 1");
+  require(eps_unknown_to_static + eps_unknown_to_dynamic + eps_unknown_to_free < 1.0, "eps_unknown_to_*",
+          "must sum to < 1");
+  require(particle_count >= 16 && particle_count <= (1 << 24), "particle_count", "must be in [16, 2^24]");
+  require(std::isfinite(birth_fraction) && birth_fraction > 0.0 && birth_fraction <= 1.0, "birth_fraction",
+          "must be in (0, 1]");
+  require(std::isfinite(birth_velocity_sigma) && birth_velocity_sigma > 0.0, "birth_velocity_sigma",
+          "must be > 0 [m/s]");
+  require(std::isfinite(acceleration_sigma) && acceleration_sigma >= 0.0, "acceleration_sigma",
+          "must be >= 0 [m/s^2]");
+  require(std::isfinite(max_speed) && max_speed > 0.0, "max_speed", "must be > 0 [m/s]");
+  require(std::isfinite(birth_motion_speed) && birth_motion_speed >= 0.0, "birth_motion_speed",
+          "must be >= 0 [m/s]");
+  require(std::isfinite(birth_motion_fraction) && birth_motion_fraction >= 0.0 && birth_motion_fraction <= 1.0,
+          "birth_motion_fraction", "must be in [0, 1]");
+  require(dynamic_threshold > 0.0 && dynamic_threshold <= 1.0, "dynamic_threshold", "must be in (0, 1]");
+  require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed",
+          "must be >= 0 [m/s]");
+  require(std::isfinite(mahalanobis_threshold) && mahalanobis_threshold >= 0.0, "mahalanobis_threshold",
+          "must be >= 0");
+  require(occupied_threshold > 0.0 && occupied_threshold <= 1.0, "occupied_threshold", "must be in (0, 1]");
+  sensor_model.validate();
+}
+
+void ParticleArrays::resize(std::size_t n)
+{
+  x.resize(n);
+  y.resize(n);
+  vx.resize(n);
+  vy.resize(n);
+  weight.resize(n);
+  cell.resize(n);
+}
+
+DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
+    : config_((config.validate(), config)), sensor_model_(config.sensor_model), rng_(config.seed)
+{
+  geometry_.width = config_.width;
+  geometry_.height = config_.height;
+  geometry_.resolution = config_.resolution;
+  const std::size_t cells = geometry_.cellCount();
+  for (auto* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_, &newborn_,
+                  &persistent_factor_, &stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
+  {
+    v->resize(cells);
+  }
+  const auto n = static_cast<std::size_t>(config_.particle_count);
+  particles_.resize(n);
+  resampled_.resize(n);
+  const auto births = static_cast<std::size_t>(std::ceil(config_.birth_fraction * n));
+  birth_cell_.resize(births);
+  for (auto* v : {&birth_x_, &birth_y_, &birth_vx_, &birth_vy_, &birth_w_})
+  {
+    v->resize(births);
+  }
+  occupied_mask_.assign(cells, 0);
+  previous_mask_.assign(cells, 0);
+  bucket_cols_ = (geometry_.width + kBucket - 1) / kBucket;
+  bucket_rows_ = (geometry_.height + kBucket - 1) / kBucket;
+  bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1, 0);
+  normalTable();
+  reset();
+}
+
+void DynamicGridFilter::reset()
+{
+  const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  cells_.reset(geometry_.cellCount(), prior_var);
+  std::fill(particles_.weight.begin(), particles_.weight.end(), 0.0F);
+  std::fill(particles_.cell.begin(), particles_.cell.end(), -1);
+  occupancy_.assign(geometry_.cellCount(), 0.5F);
+  std::fill(occupied_mask_.begin(), occupied_mask_.end(), 0);
+  std::fill(previous_mask_.begin(), previous_mask_.end(), 0);
+  vacated_.clear();
+  have_previous_ = false;
+  rng_.seed(config_.seed);
+  normal_has_spare_ = false;
+  initialised_ = false;
+}
+
+inline float DynamicGridFilter::normal()
+{
+  if (normal_has_spare_)
+  {
+    normal_has_spare_ = false;
+    return normalTable()[normal_bits_ >> kNormalTableBits];
+  }
+  normal_bits_ = static_cast<std::uint32_t>(rng_());
+  normal_has_spare_ = true;
+  return normalTable()[normal_bits_ & (kNormalTableSize - 1)];
+}
+
+inline float DynamicGridFilter::uniform()
+{
+  return static_cast<float>(static_cast<std::uint32_t>(rng_()) >> 8) * (1.0F / 16777216.0F);
+}
+
+void DynamicGridFilter::placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col,
+                                  std::int64_t& row) const
+{
+  // Eq. 1: centre = sensor + lookahead * heading, heading = the sensor x axis on the ground.
+  const Eigen::Vector3d x_axis = world_from_sensor.linear().col(0);
+  const double yaw = std::atan2(x_axis.y(), x_axis.x());
+  const double cx = world_from_sensor.translation().x() + config_.lookahead * std::cos(yaw);
+  const double cy = world_from_sensor.translation().y() + config_.lookahead * std::sin(yaw);
+  col = static_cast<std::int64_t>(std::llround(cx / config_.resolution - 0.5 * config_.width));
+  row = static_cast<std::int64_t>(std::llround(cy / config_.resolution - 0.5 * config_.height));
+}
+
+void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, float to_unknown)
+{
+  // Eq. 3: constant velocity with a random acceleration a ~ N(0, sigma_a^2) per axis:
+  // x += v dt + a dt^2 / 2, v += a dt.
+  const float sa = static_cast<float>(config_.acceleration_sigma);
+  const float res = static_cast<float>(geometry_.resolution);
+  const float w_lim = static_cast<float>(geometry_.width) * res;
+  const float h_lim = static_cast<float>(geometry_.height) * res;
+  const float max_v2 = static_cast<float>(config_.max_speed * config_.max_speed);
+  const float inv_res = 1.0F / res;
+  ParticleArrays& p = particles_;
+  const std::size_t n = p.size();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (p.weight[i] <= 0.0F)
+    {
+      p.cell[i] = -1;
+      continue;
+    }
+    const float ax = sa * normal();
+    const float ay = sa * normal();
+    p.x[i] += (p.vx[i] + 0.5F * ax * dt) * dt;
+    p.y[i] += (p.vy[i] + 0.5F * ay * dt) * dt;
+    p.vx[i] += ax * dt;
+    p.vy[i] += ay * dt;
+    if (!(p.x[i] >= 0.0F && p.y[i] >= 0.0F && p.x[i] < w_lim && p.y[i] < h_lim) ||
+        p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > max_v2)
+    {
+      p.weight[i] = 0.0F;
+      p.cell[i] = -1;
+      continue;
+    }
+    const int c = std::min(static_cast<int>(p.x[i] * inv_res), geometry_.width - 1);
+    const int r = std::min(static_cast<int>(p.y[i] * inv_res), geometry_.height - 1);
+    const std::size_t cell = geometry_.index(r, c);
+    p.cell[i] = static_cast<std::int32_t>(cell);
+    // Eq. 4: the particle keeps the fraction `keep` of its mass as dynamic; the rest becomes
+    // static or unknown mass of the cell it arrives in.
+    const float w = p.weight[i];
+    pred_dynamic_[cell] += w * keep;
+    from_dynamic_static_[cell] += w * to_static;
+    from_dynamic_unknown_[cell] += w * to_unknown;
+    p.weight[i] = w * keep;
+  }
+}
+
+DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
+                                           const Eigen::Isometry3d& world_from_sensor, double stamp)
+{
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point t_start = Clock::now();
+  DynamicGridCycle cycle;
+  if (initialised_)
+  {
+    const double gap = stamp - last_stamp_;
+    if (gap < 0.0 || gap > config_.max_time_gap)
+    {
+      cycle.reset = true;
+      cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
+                                     : "gap of " + std::to_string(gap) +
+                                           " s since the last scan exceeds max_time_gap (" +
+                                           std::to_string(config_.max_time_gap) + " s)";
+      reset();
+    }
+  }
+  const bool first = !initialised_;
+  const double dt = first ? 0.0 : stamp - last_stamp_;
+  cycle.dt = dt;
+
+  // 1. Ego motion: move the grid by whole cells; particles keep their fixed-frame position.
+  std::int64_t col = 0;
+  std::int64_t row = 0;
+  placeGrid(world_from_sensor, col, row);
+  if (first)
+  {
+    geometry_.origin_col = col;
+    geometry_.origin_row = row;
+  }
+  else
+  {
+    cycle.shift_cols = col - geometry_.origin_col;
+    cycle.shift_rows = row - geometry_.origin_row;
+    const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var);
+    geometry_.origin_col = col;
+    geometry_.origin_row = row;
+    // The occupied mask of the last scan, moved like the cells: the previous scan's mask.
+    const int w = geometry_.width;
+    const int h = geometry_.height;
+    for (int r = 0; r < h; ++r)
+    {
+      const std::int64_t src_r = r + cycle.shift_rows;
+      for (int c = 0; c < w; ++c)
+      {
+        const std::int64_t src_c = c + cycle.shift_cols;
+        previous_mask_[geometry_.index(r, c)] =
+            (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+                ? occupied_mask_[static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                 static_cast<std::size_t>(src_c)]
+                : 0;
+      }
+    }
+    const float sx = static_cast<float>(static_cast<double>(cycle.shift_cols) * geometry_.resolution);
+    const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
+    if (sx != 0.0F || sy != 0.0F)
+    {
+      for (std::size_t i = 0; i < particles_.size(); ++i)
+      {
+        particles_.x[i] -= sx;
+        particles_.y[i] -= sy;
+      }
+    }
+  }
+  initialised_ = true;
+  last_stamp_ = stamp;
+  ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
+
+  // 2. Inverse sensor model: p_o per cell.
+  const Clock::time_point t_model = Clock::now();
+  if (cloud.size() > 0)
+  {
+    cycle.sensor = sensor_model_.compute(cloud, world_from_sensor, geometry_, occupancy_);
+  }
+  else
+  {
+    occupancy_.assign(geometry_.cellCount(), 0.5F);
+  }
+  const Clock::time_point t_model_end = Clock::now();
+  findMotionCells(first);
+
+  // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
+  // scan has no motion; its transitions use one transition_period so that it counts.
+  const double dt_transition = first ? config_.transition_period : dt;
+  const Row rs = scaledRow({config_.eps_static_to_dynamic, config_.eps_static_to_unknown, 0.0}, dt_transition,
+                           config_.transition_period);
+  const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
+                           dt_transition, config_.transition_period);
+  const Row re =
+      scaledRow({config_.eps_free_to_static, config_.eps_free_to_dynamic, config_.eps_free_to_unknown},
+                dt_transition, config_.transition_period);
+  const Row ru =
+      scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
+                dt_transition, config_.transition_period);
+
+  const std::size_t cells = geometry_.cellCount();
+  std::fill(pred_dynamic_.begin(), pred_dynamic_.end(), 0.0F);
+  std::fill(from_dynamic_static_.begin(), from_dynamic_static_.end(), 0.0F);
+  std::fill(from_dynamic_unknown_.begin(), from_dynamic_unknown_.end(), 0.0F);
+  if (!first)
+  {
+    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
+  }
+  ParticleArrays& p = particles_;
+  const std::size_t n = p.size();
+
+  // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
+  const float inv_information =
+      1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5, 0.5 - config_.sensor_model.p_free));
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    const float s = cells_.p_static[c];
+    const float e = cells_.p_free[c];
+    const float u = cells_.p_unknown[c];
+    const float po = occupancy_[c];
+    // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
+    // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
+    // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
+    // instead of drifting to a stale static/free prior while it is shadowed).
+    const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
+    const float u_s = lambda * ru.to[0];
+    const float u_d = lambda * ru.to[1];
+    const float u_e = lambda * ru.to[2];
+    const float s_pred = s * rs.stay + e * re.to[0] + u * u_s + from_dynamic_static_[c];
+    const float d_persistent = pred_dynamic_[c];
+    const float d_newborn = s * rs.to[0] + e * re.to[1] + u * u_d;
+    const float e_pred = e * re.stay + u * u_e;
+    float u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
+    const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
+    if (total < 1.0F)
+    {
+      u_pred += 1.0F - total;  // mass that moved out of the cell with its particles: unknown now
+    }
+    const float ls = po * s_pred;
+    const float ldp = po * d_persistent;
+    const float ldn = po * d_newborn;
+    const float le = (1.0F - po) * e_pred;
+    const float lu = 0.5F * u_pred;
+    const float z = ls + ldp + ldn + le + lu;
+    const float inv_z = 1.0F / z;
+    cells_.p_static[c] = ls * inv_z;
+    cells_.p_dynamic[c] = (ldp + ldn) * inv_z;
+    cells_.p_free[c] = le * inv_z;
+    cells_.p_unknown[c] = lu * inv_z;
+    persistent_factor_[c] = po * inv_z;
+    newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
+  }
+
+  // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
+  // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
+  std::fill(stat_w_.begin(), stat_w_.end(), 0.0F);
+  std::fill(stat_vx_.begin(), stat_vx_.end(), 0.0F);
+  std::fill(stat_vy_.begin(), stat_vy_.end(), 0.0F);
+  std::fill(stat_vxx_.begin(), stat_vxx_.end(), 0.0F);
+  std::fill(stat_vyy_.begin(), stat_vyy_.end(), 0.0F);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const std::int32_t ci = p.cell[i];
+    if (ci < 0)
+    {
+      continue;
+    }
+    const auto c = static_cast<std::size_t>(ci);
+    const float w = p.weight[i] * persistent_factor_[c];
+    p.weight[i] = w;
+    const float vx = p.vx[i];
+    const float vy = p.vy[i];
+    stat_w_[c] += w;
+    stat_vx_[c] += w * vx;
+    stat_vy_[c] += w * vy;
+    stat_vxx_[c] += w * vx * vx;
+    stat_vyy_[c] += w * vy * vy;
+  }
+  const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    const float w = stat_w_[c];
+    if (w > 1e-12F)
+    {
+      const float mx = stat_vx_[c] / w;
+      const float my = stat_vy_[c] / w;
+      cells_.vx[c] = mx;
+      cells_.vy[c] = my;
+      cells_.v_var_x[c] = std::max(stat_vxx_[c] / w - mx * mx, 0.0F);
+      cells_.v_var_y[c] = std::max(stat_vyy_[c] / w - my * my, 0.0F);
+    }
+    else
+    {
+      cells_.vx[c] = 0.0F;
+      cells_.vy[c] = 0.0F;
+      cells_.v_var_x[c] = prior_var;
+      cells_.v_var_y[c] = prior_var;
+    }
+  }
+
+  // 8-9. Birth in proportion to the newborn mass, resampling.
+  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
+  const Clock::time_point t_end = Clock::now();
+  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
+  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
+  return cycle;
+}
+
+void DynamicGridFilter::findMotionCells(bool first)
+{
+  // Appearing cell: measured occupied now (p_o > 1/2), not in the previous scan. Vacated cell:
+  // measured occupied in the previous scan, measured free now (p_o < 1/2): what occupied it has
+  // moved (a static object does not leave a cell that stays in view). Vacated cells are bucketed
+  // (counting sort) for the search of motionVelocity().
+  const std::size_t cells = geometry_.cellCount();
+  const bool use = !first && have_previous_ && config_.birth_motion_speed > 0.0 &&
+                   config_.birth_motion_fraction > 0.0;
+  vacated_.clear();
+  if (use)
+  {
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      if (previous_mask_[c] && occupancy_[c] < 0.5F)
+      {
+        vacated_.push_back(static_cast<std::int32_t>(c));
+      }
+    }
+  }
+  std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
+  bucket_cells_.resize(vacated_.size());
+  const auto w = static_cast<std::size_t>(geometry_.width);
+  auto bucketOf = [&](std::int32_t c)
+  {
+    const auto uc = static_cast<std::size_t>(c);
+    return (uc / w / kBucket) * static_cast<std::size_t>(bucket_cols_) + (uc % w) / kBucket;
+  };
+  for (std::int32_t c : vacated_)
+  {
+    ++bucket_start_[bucketOf(c) + 1];
+  }
+  for (std::size_t b = 1; b < bucket_start_.size(); ++b)
+  {
+    bucket_start_[b] += bucket_start_[b - 1];
+  }
+  candidates_.assign(bucket_start_.begin(), bucket_start_.end() - 1);  // fill positions
+  for (std::int32_t c : vacated_)
+  {
+    bucket_cells_[static_cast<std::size_t>(candidates_[bucketOf(c)]++)] = c;
+  }
+  candidates_.clear();
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    occupied_mask_[c] = occupancy_[c] > 0.5F ? 1 : 0;
+  }
+  have_previous_ = true;
+}
+
+bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy)
+{
+  if (vacated_.empty() || dt <= 0.0F)
+  {
+    return false;
+  }
+  const float res = static_cast<float>(geometry_.resolution);
+  const float radius = static_cast<float>(config_.birth_motion_speed) * dt;
+  const int w = geometry_.width;
+  const int row = static_cast<int>(cell / static_cast<std::size_t>(w));
+  const int col = static_cast<int>(cell % static_cast<std::size_t>(w));
+  const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
+  const float r2 = radius * radius;
+  candidates_.clear();
+  const int b_r0 = std::max(0, (row - reach) / kBucket);
+  const int b_r1 = std::min(bucket_rows_ - 1, (row + reach) / kBucket);
+  const int b_c0 = std::max(0, (col - reach) / kBucket);
+  const int b_c1 = std::min(bucket_cols_ - 1, (col + reach) / kBucket);
+  for (int br = b_r0; br <= b_r1; ++br)
+  {
+    for (int bc = b_c0; bc <= b_c1; ++bc)
+    {
+      const std::size_t b = static_cast<std::size_t>(br) * static_cast<std::size_t>(bucket_cols_) +
+                            static_cast<std::size_t>(bc);
+      for (std::int32_t k = bucket_start_[b]; k < bucket_start_[b + 1]; ++k)
+      {
+        const std::int32_t v = bucket_cells_[static_cast<std::size_t>(k)];
+        const float dr = static_cast<float>(v / w - row) * res;
+        const float dc = static_cast<float>(v % w - col) * res;
+        if (dr * dr + dc * dc <= r2)
+        {
+          candidates_.push_back(v);
+        }
+      }
+    }
+  }
+  if (candidates_.empty())
+  {
+    return false;
+  }
+  const auto pick = std::min(static_cast<std::size_t>(uniform() * static_cast<float>(candidates_.size())),
+                             candidates_.size() - 1);
+  const std::int32_t v = candidates_[pick];
+  // The particle came from a uniform point of the vacated cell to its own position within dt.
+  const float sx = (static_cast<float>(v % w) + uniform()) * res;
+  const float sy = (static_cast<float>(v / w) + uniform()) * res;
+  vx = (x - sx) / dt;
+  vy = (y - sy) / dt;
+  return true;
+}
+
+std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
+{
+  // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
+  // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
+  // of cell c weighs newborn_c / n_c, is uniform in the cell, with v ~ N(0, sigma_b^2 I).
+  const std::size_t cells = geometry_.cellCount();
+  double newborn_total = 0.0;
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    newborn_total += newborn_[c];
+  }
+  const std::size_t capacity = birth_cell_.size();
+  born = 0;
+  if (newborn_total > 1e-9)
+  {
+    const double step = newborn_total / static_cast<double>(capacity);
+    double next = uniform() * step;
+    double cumulative = 0.0;
+    for (std::size_t c = 0; c < cells && born < capacity; ++c)
+    {
+      if (newborn_[c] <= 0.0F)
+      {
+        continue;
+      }
+      cumulative += newborn_[c];
+      const std::size_t first = born;
+      while (next < cumulative && born < capacity)
+      {
+        birth_cell_[born++] = static_cast<std::int32_t>(c);
+        next += step;
+      }
+      const std::size_t count = born - first;
+      if (count == 0)
+      {
+        continue;
+      }
+      const float w = newborn_[c] / static_cast<float>(count);
+      const int row = static_cast<int>(c / static_cast<std::size_t>(geometry_.width));
+      const int col = static_cast<int>(c % static_cast<std::size_t>(geometry_.width));
+      const float res = static_cast<float>(geometry_.resolution);
+      const float sb = static_cast<float>(config_.birth_velocity_sigma);
+      const bool appearing = !vacated_.empty() && !previous_mask_[c];
+      const auto fraction = static_cast<float>(config_.birth_motion_fraction);
+      for (std::size_t k = first; k < born; ++k)
+      {
+        birth_x_[k] = (static_cast<float>(col) + uniform()) * res;
+        birth_y_[k] = (static_cast<float>(row) + uniform()) * res;
+        if (!(appearing && uniform() < fraction &&
+              motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k])))
+        {
+          birth_vx_[k] = sb * normal();
+          birth_vy_[k] = sb * normal();
+        }
+        birth_w_[k] = w;
+      }
+    }
+  }
+
+  // Eq. 11: systematic resampling of the persistent and newborn particles to N particles of
+  // equal weight W / N, W = their total weight (the dynamic mass carried stays the same).
+  ParticleArrays& p = particles_;
+  const std::size_t n = p.size();
+  double total = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    total += p.weight[i];
+  }
+  for (std::size_t k = 0; k < born; ++k)
+  {
+    total += birth_w_[k];
+  }
+  if (total <= 1e-12)
+  {
+    std::fill(p.weight.begin(), p.weight.end(), 0.0F);
+    std::fill(p.cell.begin(), p.cell.end(), -1);
+    return 0;
+  }
+  const double step = total / static_cast<double>(n);
+  const auto w_out = static_cast<float>(step);
+  double next = uniform() * step;
+  double cumulative = 0.0;
+  std::size_t out = 0;
+  ParticleArrays& r = resampled_;
+  auto emit = [&](float x, float y, float vx, float vy, float w, std::int32_t cell)
+  {
+    cumulative += w;
+    while (next < cumulative && out < n)
+    {
+      r.x[out] = x;
+      r.y[out] = y;
+      r.vx[out] = vx;
+      r.vy[out] = vy;
+      r.weight[out] = w_out;
+      r.cell[out] = cell;
+      ++out;
+      next += step;
+    }
+  };
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (p.weight[i] > 0.0F)
+    {
+      emit(p.x[i], p.y[i], p.vx[i], p.vy[i], p.weight[i], p.cell[i]);
+    }
+  }
+  for (std::size_t k = 0; k < born; ++k)
+  {
+    emit(birth_x_[k], birth_y_[k], birth_vx_[k], birth_vy_[k], birth_w_[k], birth_cell_[k]);
+  }
+  const std::size_t in_use = out;
+  for (; out < n; ++out)  // rounding at the very end: no particle left to copy
+  {
+    r.weight[out] = 0.0F;
+    r.cell[out] = -1;
+  }
+  std::swap(particles_, resampled_);
+  return in_use;
+}
+
+void DynamicGridFilter::setClassification(const DynamicGridConfig& thresholds)
+{
+  DynamicGridConfig updated = config_;
+  updated.dynamic_threshold = thresholds.dynamic_threshold;
+  updated.min_dynamic_speed = thresholds.min_dynamic_speed;
+  updated.mahalanobis_threshold = thresholds.mahalanobis_threshold;
+  updated.occupied_threshold = thresholds.occupied_threshold;
+  updated.validate();
+  config_ = updated;
+}
+
+CellClass DynamicGridFilter::classify(std::size_t index) const
+{
+  const float ps = cells_.p_static[index];
+  const float pd = cells_.p_dynamic[index];
+  const float pe = cells_.p_free[index];
+  const float pu = cells_.p_unknown[index];
+  if (pd >= config_.dynamic_threshold)
+  {
+    const float vx = cells_.vx[index];
+    const float vy = cells_.vy[index];
+    const float speed2 = vx * vx + vy * vy;
+    const float m2 =
+        vx * vx / std::max(cells_.v_var_x[index], 1e-6F) + vy * vy / std::max(cells_.v_var_y[index], 1e-6F);
+    if (speed2 >= config_.min_dynamic_speed * config_.min_dynamic_speed &&
+        m2 >= config_.mahalanobis_threshold)
+    {
+      return CellClass::kDynamic;
+    }
+  }
+  if (ps + pd >= config_.occupied_threshold)
+  {
+    return CellClass::kStatic;
+  }
+  if (pe > pu && pe > ps + pd)
+  {
+    return CellClass::kFree;
+  }
+  return CellClass::kUnknown;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,294 @@
+// Inverse sensor model; equations in doc/grid_filter.md ("Inverse sensor model").
+#include "grid_vision_fusion/grid/inverse_sensor_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr float kPi = 3.14159265358979323846F;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+void require(bool condition, const char* field, const std::string& what)
+{
+  if (!condition)
+  {
+    throw std::invalid_argument(std::string("InverseSensorModelConfig.") + field + " " + what);
+  }
+}
+
+inline float atan2Approx(float y, float x)
+{
+  // atan on [0, 1] by a degree-11 odd minimax polynomial (|error| < 1e-5 rad), then octant
+  // reconstruction.
+  const float ax = std::fabs(x);
+  const float ay = std::fabs(y);
+  const float mx = std::max(ax, ay);
+  if (mx == 0.0F)
+  {
+    return 0.0F;
+  }
+  const float a = std::min(ax, ay) / mx;
+  const float s = a * a;
+  float r =
+      a * (0.99997726F + s * (-0.33262347F +
+                              s * (0.19354346F + s * (-0.11643287F + s * (0.05265332F + s * -0.01172120F)))));
+  if (ay > ax)
+  {
+    r = 0.5F * kPi - r;
+  }
+  if (x < 0.0F)
+  {
+    r = kPi - r;
+  }
+  return y < 0.0F ? -r : r;
+}
+
+float readFloat(const std::uint8_t* p)
+{
+  float v;
+  std::memcpy(&v, p, sizeof(float));
+  return v;
+}
+}  // namespace
+
+PointCloudView PointCloudView::packedXyz(const float* xyz, std::size_t count)
+{
+  PointCloudView view;
+  view.data = reinterpret_cast<const std::uint8_t*>(xyz);
+  view.width = count;
+  view.height = 1;
+  view.point_step = 3 * sizeof(float);
+  view.row_step = count * view.point_step;
+  return view;
+}
+
+void InverseSensorModelConfig::validate() const
+{
+  require(std::isfinite(sensor_height) && sensor_height > 0.0, "sensor_height", "must be > 0 [m]");
+  require(std::isfinite(min_range) && min_range >= 0.0, "min_range", "must be >= 0 [m]");
+  require(std::isfinite(max_range) && max_range > min_range && max_range <= 500.0, "max_range",
+          "must be in (min_range, 500] [m]");
+  require(angular_resolution >= 0.05 && angular_resolution <= 10.0, "angular_resolution",
+          "must be in [0.05, 10] [deg]");
+  require(std::isfinite(range_resolution) && range_resolution > 0.0 && max_range / range_resolution <= 1e5,
+          "range_resolution", "must be > 0 and at least max_range / 1e5 [m]");
+  require(std::isfinite(max_ground_slope) && max_ground_slope >= 0.0, "max_ground_slope", "must be >= 0");
+  require(std::isfinite(ground_tolerance) && ground_tolerance >= 0.0, "ground_tolerance", "must be >= 0 [m]");
+  require(std::isfinite(min_obstacle_height) && min_obstacle_height > 0.0, "min_obstacle_height",
+          "must be > 0 [m]");
+  require(std::isfinite(max_obstacle_height) && max_obstacle_height > min_obstacle_height,
+          "max_obstacle_height", "must be > min_obstacle_height [m]");
+  require(p_occupied > 0.5 && p_occupied < 1.0, "p_occupied", "must be in (0.5, 1)");
+  require(p_free > 0.0 && p_free < 0.5, "p_free", "must be in (0, 0.5)");
+  require(std::isfinite(range_sigma) && range_sigma > 0.0, "range_sigma", "must be > 0 [m]");
+}
+
+float fastAtan2(float y, float x)
+{
+  return atan2Approx(y, x);
+}
+
+InverseSensorModel::InverseSensorModel(const InverseSensorModelConfig& config) : config_(config)
+{
+  config_.validate();
+  sectors_ = static_cast<int>(std::ceil(360.0 / config_.angular_resolution));
+  sectors_per_rad_ = static_cast<float>(sectors_ / (2.0 * M_PI));
+  range_bins_ = static_cast<int>(std::ceil(config_.max_range / config_.range_resolution)) + 1;
+  bin_min_z_.resize(static_cast<std::size_t>(sectors_) * static_cast<std::size_t>(range_bins_));
+  ground_z_.resize(bin_min_z_.size());
+  first_hit_.resize(static_cast<std::size_t>(sectors_));
+  farthest_return_.resize(static_cast<std::size_t>(sectors_));
+}
+
+inline int InverseSensorModel::sectorOf(float dx, float dy) const
+{
+  int s = static_cast<int>((atan2Approx(dy, dx) + kPi) * sectors_per_rad_);
+  return s >= sectors_ ? s - sectors_ : (s < 0 ? 0 : s);
+}
+
+float InverseSensorModel::groundHeight(double azimuth, double range) const
+{
+  const int s = sectorOf(static_cast<float>(std::cos(azimuth)), static_cast<float>(std::sin(azimuth)));
+  const int b = std::clamp(static_cast<int>(range / config_.range_resolution), 0, range_bins_ - 1);
+  return ground_z_[static_cast<std::size_t>(s) * static_cast<std::size_t>(range_bins_) +
+                   static_cast<std::size_t>(b)];
+}
+
+InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
+                                                    const Eigen::Isometry3d& world_from_sensor,
+                                                    const GridGeometry& grid, std::vector<float>& occupancy)
+{
+  InverseSensorModelStats stats;
+  stats.points = cloud.size();
+  const Eigen::Matrix3f rot = world_from_sensor.linear().cast<float>();
+  const Eigen::Vector3d origin = world_from_sensor.translation();
+  const float min_r2 = static_cast<float>(config_.min_range * config_.min_range);
+  const float max_r2 = static_cast<float>(config_.max_range * config_.max_range);
+  const float inv_range_res = static_cast<float>(1.0 / config_.range_resolution);
+  const auto bins = static_cast<std::size_t>(range_bins_);
+
+  std::fill(bin_min_z_.begin(), bin_min_z_.end(), kInf);
+  std::fill(first_hit_.begin(), first_hit_.end(), kInf);
+  std::fill(farthest_return_.begin(), farthest_return_.end(), 0.0F);
+  const std::size_t n = cloud.size();
+  point_bin_.resize(n);
+  point_x_.resize(n);
+  point_y_.resize(n);
+  point_dz_.resize(n);
+
+  // Pass 1: points into the world-aligned sensor-centred polar frame; lowest z per bin.
+  std::size_t i = 0;
+  for (std::size_t row = 0; row < cloud.height; ++row)
+  {
+    const std::uint8_t* p = cloud.data + row * cloud.row_step;
+    for (std::size_t col = 0; col < cloud.width; ++col, ++i, p += cloud.point_step)
+    {
+      const Eigen::Vector3f ps(readFloat(p + cloud.x_offset), readFloat(p + cloud.y_offset),
+                               readFloat(p + cloud.z_offset));
+      point_bin_[i] = -1;
+      if (!ps.allFinite())
+      {
+        ++stats.invalid_points;
+        continue;
+      }
+      const Eigen::Vector3f d = rot * ps;
+      const float r2 = d.x() * d.x() + d.y() * d.y();
+      if (r2 < min_r2 || r2 > max_r2)
+      {
+        ++stats.out_of_range;
+        continue;
+      }
+      const int b = std::min(static_cast<int>(std::sqrt(r2) * inv_range_res), range_bins_ - 1);
+      const std::size_t bin =
+          static_cast<std::size_t>(sectorOf(d.x(), d.y())) * bins + static_cast<std::size_t>(b);
+      point_bin_[i] = static_cast<std::int32_t>(bin);
+      point_x_[i] = d.x();
+      point_y_[i] = d.y();
+      point_dz_[i] = d.z();
+      bin_min_z_[bin] = std::min(bin_min_z_[bin], d.z());
+    }
+  }
+
+  // Ground height along each sector: a bin's lowest point is ground when it lies within
+  // ground_tolerance + max_ground_slope * (distance to the last ground bin) of that bin's
+  // height; bins without accepted ground keep the last ground height.
+  const float tol = static_cast<float>(config_.ground_tolerance);
+  const float slope = static_cast<float>(config_.max_ground_slope);
+  const float res = static_cast<float>(config_.range_resolution);
+  for (int s = 0; s < sectors_; ++s)
+  {
+    float g = static_cast<float>(-config_.sensor_height);
+    float r_prev = 0.0F;
+    const std::size_t base = static_cast<std::size_t>(s) * bins;
+    for (int b = 0; b < range_bins_; ++b)
+    {
+      const float z = bin_min_z_[base + static_cast<std::size_t>(b)];
+      const float r = (static_cast<float>(b) + 0.5F) * res;
+      if (z < kInf && std::fabs(z - g) <= tol + slope * (r - r_prev))
+      {
+        g = z;
+        r_prev = r;
+      }
+      ground_z_[base + static_cast<std::size_t>(b)] = g;
+    }
+  }
+
+  // Pass 2: classify points; nearest obstacle hit and farthest return per sector; cells holding
+  // obstacle points.
+  occupancy.assign(grid.cellCount(), 0.5F);
+  cell_hit_.assign(grid.cellCount(), 0);
+  const float h_min = static_cast<float>(config_.min_obstacle_height);
+  const float h_max = static_cast<float>(config_.max_obstacle_height);
+  const double ox = origin.x() - grid.originX();
+  const double oy = origin.y() - grid.originY();
+  const double inv_cell = 1.0 / grid.resolution;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const std::int32_t bin = point_bin_[k];
+    if (bin < 0)
+    {
+      continue;
+    }
+    const auto sector = static_cast<std::size_t>(bin) / bins;
+    const float h = point_dz_[k] - ground_z_[static_cast<std::size_t>(bin)];
+    const float r = std::sqrt(point_x_[k] * point_x_[k] + point_y_[k] * point_y_[k]);
+    if (h > h_max)
+    {
+      ++stats.overhang_points;
+      continue;
+    }
+    farthest_return_[sector] = std::max(farthest_return_[sector], r);
+    if (h < h_min)
+    {
+      ++stats.ground_points;
+      continue;
+    }
+    ++stats.obstacle_points;
+    first_hit_[sector] = std::min(first_hit_[sector], r);
+    const double fc = std::floor((ox + point_x_[k]) * inv_cell);
+    const double fr = std::floor((oy + point_y_[k]) * inv_cell);
+    if (fc >= 0.0 && fr >= 0.0 && fc < grid.width && fr < grid.height)
+    {
+      cell_hit_[grid.index(static_cast<int>(fr), static_cast<int>(fc))] = 1;
+    }
+  }
+
+  // Polar ray casting per cell centre (the "lookup" of a cell is its sector and range from
+  // the sensor, computed with the same fastAtan2 as the points):
+  //   hit range h, sigma s, g(d) = exp(-d^2 / (2 s^2)) (0 beyond 3 s):
+  //   r <  h : p = p_free + (p_occ - p_free) g(r - h)
+  //   r >= h : p = 0.5 + (p_occ - 0.5) g(r - h)
+  //   no hit : p = p_free up to the farthest return, 0.5 beyond
+  //   cells holding obstacle points: p = p_occ.
+  const float p_occ = static_cast<float>(config_.p_occupied);
+  const float p_fr = static_cast<float>(config_.p_free);
+  const float sigma = static_cast<float>(config_.range_sigma);
+  const float inv_two_s2 = 1.0F / (2.0F * sigma * sigma);
+  const float band = 3.0F * sigma;
+  const float cell = static_cast<float>(grid.resolution);
+  const float min_r = static_cast<float>(config_.min_range);
+  const float max_r = static_cast<float>(config_.max_range);
+  for (int row = 0; row < grid.height; ++row)
+  {
+    const float dy = static_cast<float>((row + 0.5) * grid.resolution - oy);
+    const std::size_t base = grid.index(row, 0);
+    for (int col = 0; col < grid.width; ++col)
+    {
+      const std::size_t idx = base + static_cast<std::size_t>(col);
+      if (cell_hit_[idx])
+      {
+        occupancy[idx] = p_occ;
+        ++stats.occupied_cells;
+        continue;
+      }
+      const float dx = (static_cast<float>(col) + 0.5F) * cell - static_cast<float>(ox);
+      const float r = std::sqrt(dx * dx + dy * dy);
+      if (r < min_r || r > max_r)
+      {
+        continue;
+      }
+      const auto sector = static_cast<std::size_t>(sectorOf(dx, dy));
+      const float hit = first_hit_[sector];
+      if (hit < kInf)
+      {
+        const float d = r - hit;
+        const float g = std::fabs(d) < band ? std::exp(-d * d * inv_two_s2) : 0.0F;
+        occupancy[idx] = d < 0.0F ? p_fr + (p_occ - p_fr) * g : 0.5F + (p_occ - 0.5F) * g;
+      }
+      else if (r <= farthest_return_[sector])
+      {
+        occupancy[idx] = p_fr;
+      }
+    }
+  }
+  return stats;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,180 @@
+#include "grid_vision_fusion/offline/detection_bag.h"
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+bool finite(const DetectedObject& o)
+{
+  return std::isfinite(o.x_min) && std::isfinite(o.y_min) && std::isfinite(o.x_max) &&
+         std::isfinite(o.y_max) && std::isfinite(o.score) && std::isfinite(o.position.x) &&
+         std::isfinite(o.position.y) && std::isfinite(o.velocity.x) && std::isfinite(o.velocity.y) &&
+         o.x_max >= o.x_min && o.y_max >= o.y_min;
+}
+
+Motion toMotion(std::uint8_t motion)
+{
+  switch (motion)
+  {
+    case DetectedObject::MOTION_STATIC:
+      return Motion::kStatic;
+    case DetectedObject::MOTION_DYNAMIC:
+      return Motion::kDynamic;
+    default:
+      return Motion::kUnknown;
+  }
+}
+}  // namespace
+
+void DetectionBagConfig::validate() const
+{
+  if (topic.empty())
+  {
+    throw std::invalid_argument("topic must not be empty");
+  }
+  if (!(stamp_tolerance_s > 0.0) || !std::isfinite(stamp_tolerance_s))
+  {
+    throw std::invalid_argument("stamp_tolerance_s must be a finite value > 0, got " +
+                                std::to_string(stamp_tolerance_s));
+  }
+}
+
+EvalObject toEvalObject(const DetectedObject& object, const std::string& frame_name,
+                        const Eigen::Isometry3d& velo_from_world, const std::string& label)
+{
+  EvalObject o;
+  o.frame = frame_name;
+  o.label = label;
+  o.motion = toMotion(object.motion);
+  o.box = BoundingBox{object.x_min, object.y_min, object.x_max, object.y_max};
+  o.score = object.score;
+  o.has_state = true;
+  o.x = object.position.x;
+  o.y = object.position.y;
+  o.vx = object.velocity.x;
+  o.vy = object.velocity.y;
+  o.longitudinal_m = (velo_from_world * Eigen::Vector3d(object.position.x, object.position.y, 0.0)).x();
+  return o;
+}
+
+DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDrive& drive,
+                                    const DetectionBagConfig& config, const KittiGroundTruthConfig& labels,
+                                    const std::function<void(std::size_t, std::size_t)>& progress)
+{
+  config.validate();
+  rosbag::Bag bag;
+  try
+  {
+    bag.open(bag_path, rosbag::bagmode::Read);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(bag_path + ": cannot open the bag: " + e.what());
+  }
+  DetectionBagResult result;
+  try
+  {
+    rosbag::View view(bag, rosbag::TopicQuery(config.topic));
+    const std::size_t total = view.size();
+    if (total == 0)
+    {
+      std::string topics;
+      rosbag::View all(bag);
+      for (const rosbag::ConnectionInfo* c : all.getConnections())
+      {
+        if (topics.find(" " + c->topic + " ") == std::string::npos)
+        {
+          topics += " " + c->topic + " ";
+        }
+      }
+      throw std::runtime_error(
+          bag_path + ": no message on topic " + config.topic +
+          (topics.empty() ? std::string(" (the bag is empty)") : " (topics:" + topics + ")"));
+    }
+    const std::vector<double> times = drive.frameTimes();
+    struct Kept
+    {
+      double gap = 0.0;
+      std::vector<EvalObject> objects;
+    };
+    std::map<int, Kept> by_frame;
+    std::size_t read = 0;
+    for (const rosbag::MessageInstance& m : view)
+    {
+      const DetectedObjectArray::ConstPtr msg = m.instantiate<DetectedObjectArray>();
+      if (!msg)
+      {
+        throw std::runtime_error(bag_path + ": topic " + config.topic + " carries " + m.getDataType() +
+                                 ", not grid_vision_fusion/DetectedObjectArray");
+      }
+      ++read;
+      ++result.stats.messages;
+      if (progress)
+      {
+        progress(read, total);
+      }
+      const double t = msg->header.stamp.toSec();
+      const int frame = nearestFrame(times, t, config.stamp_tolerance_s);
+      if (frame < 0)
+      {
+        ++result.stats.unmatched;
+        continue;
+      }
+      if (msg->header.frame_id != config.world_frame)
+      {
+        ++result.stats.other_frame;
+      }
+      Kept kept;
+      kept.gap = std::abs(times[static_cast<std::size_t>(frame)] - t);
+      const std::string frame_name = kittiFrameName(frame);
+      const Eigen::Isometry3d velo_from_world = drive.worldFromVelo(frame).inverse();
+      for (const DetectedObject& object : msg->objects)
+      {
+        if (!finite(object))
+        {
+          ++result.stats.invalid_objects;
+          continue;
+        }
+        const std::string label = labels.labelOf(object.label);
+        if (label.empty())
+        {
+          ++result.stats.dropped_labels;
+          continue;
+        }
+        kept.objects.push_back(toEvalObject(object, frame_name, velo_from_world, label));
+      }
+      const auto existing = by_frame.find(frame);
+      if (existing != by_frame.end())
+      {
+        ++result.stats.duplicates;
+        if (existing->second.gap <= kept.gap)
+        {
+          continue;
+        }
+      }
+      by_frame[frame] = std::move(kept);
+    }
+    for (auto& [frame, kept] : by_frame)
+    {
+      result.frames.insert(frame);
+      for (EvalObject& o : kept.objects)
+      {
+        result.detections.push_back(std::move(o));
+      }
+    }
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(bag_path + ": cannot read the bag: " + e.what());
+  }
+  return result;
+}
+
+}  // namespace grid_vision_fusion

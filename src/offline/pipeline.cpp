@@ -1,0 +1,503 @@
+#include "grid_vision_fusion/offline/pipeline.h"
+
+#include <rosbag/view.h>
+#include <sys/resource.h>
+#include <tf2/exceptions.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+
+#include "grid_vision_fusion/ros/detector_conversions.h"
+#include "grid_vision_fusion/ros/grid_conversions.h"
+#include "grid_vision_fusion/ros/projection_conversions.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr std::size_t kMaxWarnings = 20;
+
+double elapsedMs(const std::chrono::steady_clock::time_point& start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSource& detector,
+                                        const ParamSource& projection, const ParamSource& fusion)
+{
+  PipelineConfig config;
+  config.grid = dynamicGridConfigFromParams(grid);
+  config.grid_node = dynamicGridNodeOptionsFromParams(grid);
+  readParam(detector, "backend", config.backend);
+  if (config.backend == "opencv_dnn")
+  {
+    config.yolo = yoloDetectorConfigFromParams(detector);
+  }
+  else if (config.backend == "replay")
+  {
+    config.replay = detectionReplayConfigFromParams(detector);
+  }
+  else
+  {
+    throw std::invalid_argument("parameter " + detector.describe("backend") +
+                                " must be \"opencv_dnn\" or \"replay\", got \"" + config.backend + "\"");
+  }
+  config.projection = gridProjectionConfigFromParams(projection);
+  config.projection_node = gridProjectionNodeOptionsFromParams(projection);
+  config.fusion = fusionConfigFromParams(fusion);
+  readParam(fusion, "queue_size", config.fusion_queue_size);
+  if (config.fusion_queue_size < 1)
+  {
+    throw std::invalid_argument("parameter " + fusion.describe("queue_size") + " must be >= 1, got " +
+                                std::to_string(config.fusion_queue_size));
+  }
+  return config;
+}
+
+Pipeline::Pipeline(const PipelineConfig& config, PipelineOutputs outputs)
+  : config_(config), outputs_(std::move(outputs)), tf_(ros::Duration(tf2::BufferCore::DEFAULT_CACHE_TIME))
+{
+  if (!(config_.max_tf_wait >= 0.0))
+  {
+    throw std::invalid_argument("max_tf_wait must be >= 0 s");
+  }
+  if (config_.fusion_queue_size < 1)
+  {
+    throw std::invalid_argument("fusion_queue_size must be >= 1");
+  }
+  config_.fusion.validate();
+  config_.projection.validate();
+  filter_ = std::make_unique<DynamicGridFilter>(config_.grid);
+  if (config_.backend == "opencv_dnn")
+  {
+    detector_ = std::make_unique<YoloDetector>(config_.yolo);
+  }
+  else if (config_.backend == "replay")
+  {
+    replay_ = std::make_unique<DetectionReplay>(config_.replay);
+    replay_->setScoreThreshold(config_.replay.score_threshold);
+  }
+  else
+  {
+    throw std::invalid_argument("backend must be \"opencv_dnn\" or \"replay\", got \"" + config_.backend + "\"");
+  }
+}
+
+Pipeline::~Pipeline() = default;
+
+std::vector<std::string> Pipeline::detectorWarnings() const
+{
+  return detector_ ? detector_->warnings() : std::vector<std::string>();
+}
+
+void Pipeline::warn(const std::string& what)
+{
+  if (stats_.warnings.size() < kMaxWarnings &&
+      std::find(stats_.warnings.begin(), stats_.warnings.end(), what) == stats_.warnings.end())
+  {
+    stats_.warnings.push_back(what);
+  }
+}
+
+void Pipeline::addTf(const tf2_msgs::TFMessage& msg, bool is_static)
+{
+  for (const auto& transform : msg.transforms)
+  {
+    try
+    {
+      tf_.setTransform(transform, is_static ? "bag /tf_static" : "bag /tf", is_static);
+    }
+    catch (const std::exception& e)
+    {
+      warn(std::string("transform ignored: ") + e.what());
+    }
+    if (!is_static && transform.header.stamp > latest_tf_stamp_)
+    {
+      latest_tf_stamp_ = transform.header.stamp;
+    }
+  }
+}
+
+void Pipeline::enqueue(Pending pending)
+{
+  pending.order = arrivals_++;
+  const auto before = [](const Pending& a, const Pending& b)
+  {
+    if (a.stamp != b.stamp)
+    {
+      return a.stamp < b.stamp;
+    }
+    if (a.kind != b.kind)
+    {
+      return a.kind < b.kind;
+    }
+    return a.order < b.order;
+  };
+  queue_.insert(std::upper_bound(queue_.begin(), queue_.end(), pending, before), std::move(pending));
+}
+
+void Pipeline::addCloud(const sensor_msgs::PointCloud2::ConstPtr& msg)
+{
+  ++stats_.clouds;
+  Pending p;
+  p.stamp = msg->header.stamp;
+  p.kind = Kind::kCloud;
+  p.cloud = msg;
+  enqueue(std::move(p));
+}
+
+void Pipeline::addImage(const sensor_msgs::Image::ConstPtr& msg)
+{
+  ++stats_.images;
+  Pending p;
+  p.stamp = msg->header.stamp;
+  p.kind = Kind::kImage;
+  p.image = msg;
+  enqueue(std::move(p));
+}
+
+void Pipeline::addCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& msg)
+{
+  ++stats_.camera_infos;
+  Pending p;
+  p.stamp = msg->header.stamp;
+  p.kind = Kind::kCameraInfo;
+  p.info = msg;
+  enqueue(std::move(p));
+}
+
+void Pipeline::advanceTo(const ros::Time& bag_time)
+{
+  if (bag_time > bag_time_)
+  {
+    bag_time_ = bag_time;
+  }
+  release(false);
+}
+
+void Pipeline::finish()
+{
+  release(true);
+}
+
+bool Pipeline::tfReady(const Pending& p) const
+{
+  const std::string& fixed = config_.grid_node.fixed_frame;
+  switch (p.kind)
+  {
+    case Kind::kCloud:
+      return tf_.canTransform(fixed, p.cloud->header.frame_id, p.stamp, nullptr);
+    case Kind::kCameraInfo:
+    {
+      const std::string& ground = config_.projection_node.ground_frame;
+      const std::string grid_frame = latest_grid_ ? latest_grid_->header.frame_id : fixed;
+      return tf_.canTransform(p.info->header.frame_id, grid_frame, p.stamp, nullptr) &&
+             (ground.empty() || tf_.canTransform(grid_frame, ground, p.stamp, nullptr));
+    }
+    case Kind::kImage:
+    default:
+      return true;
+  }
+}
+
+void Pipeline::release(bool everything)
+{
+  while (!queue_.empty())
+  {
+    const Pending& head = queue_.front();
+    if (!everything)
+    {
+      // Every message stamped up to the head's stamp has been read once the bag is past it.
+      if (!(bag_time_ > head.stamp))
+      {
+        return;
+      }
+      if (!tfReady(head) && (bag_time_ - head.stamp).toSec() < config_.max_tf_wait)
+      {
+        return;
+      }
+    }
+    const Pending pending = std::move(queue_.front());
+    queue_.pop_front();
+    process(pending);
+  }
+}
+
+void Pipeline::process(const Pending& pending)
+{
+  switch (pending.kind)
+  {
+    case Kind::kCloud:
+      processCloud(*pending.cloud);
+      break;
+    case Kind::kImage:
+      processImage(pending.image);
+      break;
+    case Kind::kCameraInfo:
+      processCameraInfo(*pending.info);
+      break;
+  }
+}
+
+void Pipeline::processCloud(const sensor_msgs::PointCloud2& msg)
+{
+  const auto start = std::chrono::steady_clock::now();
+  PointCloudView view;
+  const std::string field_error = pointCloudViewOf(msg, view);
+  if (!field_error.empty())
+  {
+    ++stats_.grid_drops;
+    warn("dynamic_grid: cloud of frame '" + msg.header.frame_id + "' unusable: " + field_error);
+    return;
+  }
+  Eigen::Isometry3d world_from_sensor;
+  try
+  {
+    world_from_sensor = scanPose(tf_, config_.grid_node.fixed_frame, msg.header.frame_id, msg.header.stamp);
+  }
+  catch (const tf2::TransformException& e)
+  {
+    ++stats_.grid_drops;
+    warn("dynamic_grid: scan dropped, no tf " + config_.grid_node.fixed_frame + " <- " + msg.header.frame_id +
+         ": " + e.what());
+    return;
+  }
+  const DynamicGridCycle cycle = filter_->update(view, world_from_sensor, msg.header.stamp.toSec());
+  if (cycle.reset)
+  {
+    ++stats_.grid_resets;
+    warn("dynamic_grid: grid reset: " + cycle.reset_reason);
+  }
+  std_msgs::Header header;
+  header.stamp = msg.header.stamp;
+  header.frame_id = config_.grid_node.fixed_frame;
+  DynamicGrid::ConstPtr grid = dynamicGridToMsg(*filter_, header);
+  const std::string grid_error = checkDynamicGrid(*grid);
+  if (!grid_error.empty())
+  {
+    ++stats_.grid_drops;
+    warn("grid_projection: grid dropped: " + grid_error);
+  }
+  else
+  {
+    latest_grid_ = grid;
+  }
+  ++stats_.grids;
+  stats_.grid_ms.push_back(elapsedMs(start));
+  if (outputs_.grid)
+  {
+    outputs_.grid(grid);
+  }
+}
+
+void Pipeline::processImage(const sensor_msgs::Image::ConstPtr& msg)
+{
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Detection> detections;
+  try
+  {
+    if (replay_)
+    {
+      const std::int64_t frame_index = replay_->nextFrameIndex(msg->header.seq);
+      detections = replay_->detectionsOf(frame_index, msg->width, msg->height);
+    }
+    else
+    {
+      detections = detectInImage(*detector_, msg);
+    }
+  }
+  catch (const std::exception& e)
+  {
+    ++stats_.detector_drops;
+    warn(std::string("yolo_detector: image not processed: ") + e.what());
+    return;
+  }
+  Detection2DArray::ConstPtr out = detectionsToMsg(msg->header, msg->width, msg->height, detections);
+  ++stats_.detections;
+  stats_.detector_ms.push_back(elapsedMs(start));
+  if (outputs_.detections)
+  {
+    outputs_.detections(out);
+  }
+  detections_[out->header.stamp] = out;
+  tryFuse(out->header.stamp);
+}
+
+void Pipeline::processCameraInfo(const sensor_msgs::CameraInfo& msg)
+{
+  const auto start = std::chrono::steady_clock::now();
+  if (!latest_grid_)
+  {
+    ++stats_.projection_drops;
+    warn("grid_projection: camera_info before any grid");
+    return;
+  }
+  ProjectedGrid::ConstPtr projected;
+  try
+  {
+    projected = projectGridIntoCamera(*latest_grid_, msg, tf_, config_.projection_node, config_.projection);
+  }
+  catch (const ProjectionSkipped& e)
+  {
+    ++stats_.projection_drops;
+    warn(std::string("grid_projection: nothing projected: ") + e.what());
+    return;
+  }
+  ++stats_.projections;
+  stats_.projection_ms.push_back(elapsedMs(start));
+  if (outputs_.projected_grid)
+  {
+    outputs_.projected_grid(projected);
+  }
+  projections_[projected->header.stamp] = projected;
+  tryFuse(projected->header.stamp);
+}
+
+void Pipeline::tryFuse(const ros::Time& stamp)
+{
+  const auto detections = detections_.find(stamp);
+  const auto projection = projections_.find(stamp);
+  if (detections != detections_.end() && projection != projections_.end())
+  {
+    const auto start = std::chrono::steady_clock::now();
+    try
+    {
+      FusedPair pair = fusePair(*detections->second, *projection->second, config_.fusion);
+      ++stats_.objects;
+      stats_.fusion_ms.push_back(elapsedMs(start));
+      if (outputs_.objects)
+      {
+        outputs_.objects(pair.objects);
+      }
+    }
+    catch (const std::invalid_argument& e)
+    {
+      ++stats_.fusion_drops;
+      warn(std::string("fusion: pair dropped: ") + e.what());
+    }
+    detections_.erase(detections);
+    projections_.erase(projection);
+  }
+  // A synchroniser queue: the oldest unmatched message goes when the queue is full.
+  const auto size = static_cast<std::size_t>(config_.fusion_queue_size);
+  while (detections_.size() > size)
+  {
+    detections_.erase(detections_.begin());
+    ++stats_.fusion_drops;
+  }
+  while (projections_.size() > size)
+  {
+    projections_.erase(projections_.begin());
+    ++stats_.fusion_drops;
+  }
+}
+
+BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag, const PipelineTopics& topics,
+                               const std::function<void(std::size_t, std::size_t)>& progress)
+{
+  const auto start = std::chrono::steady_clock::now();
+  BagRunSummary summary;
+  rosbag::Bag bag(input_bag, rosbag::bagmode::Read);
+  const std::vector<std::string> wanted{topics.points, topics.image, topics.camera_info, topics.tf,
+                                        topics.tf_static};
+  rosbag::View view(bag, rosbag::TopicQuery(wanted));
+  const std::size_t total = view.size();
+  if (total == 0)
+  {
+    throw std::runtime_error("bag " + input_bag + " has none of the topics " + topics.points + ", " + topics.image +
+                             ", " + topics.camera_info + ", " + topics.tf + ", " + topics.tf_static);
+  }
+  ros::Time first, last;
+  for (const rosbag::MessageInstance& m : view)
+  {
+    const std::string& topic = m.getTopic();
+    bool known_type = true;
+    if (topic == topics.tf || topic == topics.tf_static)
+    {
+      const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+      known_type = static_cast<bool>(msg);
+      if (msg)
+      {
+        pipeline.addTf(*msg, topic == topics.tf_static);
+      }
+    }
+    else if (topic == topics.points)
+    {
+      const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
+      known_type = static_cast<bool>(msg);
+      if (msg)
+      {
+        pipeline.addCloud(msg);
+      }
+    }
+    else if (topic == topics.image)
+    {
+      const auto msg = m.instantiate<sensor_msgs::Image>();
+      known_type = static_cast<bool>(msg);
+      if (msg)
+      {
+        pipeline.addImage(msg);
+        ++summary.frames;
+      }
+    }
+    else if (topic == topics.camera_info)
+    {
+      const auto msg = m.instantiate<sensor_msgs::CameraInfo>();
+      known_type = static_cast<bool>(msg);
+      if (msg)
+      {
+        pipeline.addCameraInfo(msg);
+      }
+    }
+    if (!known_type)
+    {
+      throw std::runtime_error("topic " + topic + " of " + input_bag + " holds " + m.getDataType() +
+                               " messages, not the type run_pipeline expects there");
+    }
+    if (summary.messages_read == 0)
+    {
+      first = m.getTime();
+    }
+    last = m.getTime();
+    ++summary.messages_read;
+    pipeline.advanceTo(m.getTime());
+    if (topic == topics.image)
+    {
+      summary.rss_mb.push_back(residentMemoryMiB());
+    }
+    if (progress)
+    {
+      progress(summary.messages_read, total);
+    }
+  }
+  pipeline.finish();
+  summary.bag_duration_s = (last - first).toSec();
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+double residentMemoryMiB()
+{
+  std::ifstream statm("/proc/self/statm");
+  std::size_t size = 0, resident = 0;
+  if (!(statm >> size >> resident))
+  {
+    return 0.0;
+  }
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+double peakResidentMemoryMiB()
+{
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0)
+  {
+    return 0.0;
+  }
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+}  // namespace grid_vision_fusion

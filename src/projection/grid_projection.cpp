@@ -1,0 +1,195 @@
+#include "grid_vision_fusion/projection/grid_projection.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+void require(bool condition, const std::string& message)
+{
+  if (!condition)
+  {
+    throw std::invalid_argument(message);
+  }
+}
+
+bool allFinite(const Eigen::Isometry3d& transform) { return transform.matrix().allFinite(); }
+}  // namespace
+
+void GridCellsView::validate() const
+{
+  require(std::isfinite(resolution) && resolution > 0.0,
+          "grid resolution must be finite and > 0 m, got " + std::to_string(resolution));
+  require(std::isfinite(origin_x) && std::isfinite(origin_y), "grid origin must be finite");
+  if (size() > 0)
+  {
+    require(p_static != nullptr && p_dynamic != nullptr && vx != nullptr && vy != nullptr,
+            "grid of " + std::to_string(width) + "x" + std::to_string(height) +
+                " cells lacks one of the arrays p_static, p_dynamic, vx, vy");
+  }
+}
+
+PinholeCamera::PinholeCamera(const Eigen::Matrix<double, 3, 4>& projection, std::uint32_t width,
+                             std::uint32_t height)
+  : projection_(projection), width_(width), height_(height)
+{
+  require(projection.allFinite(), "camera projection matrix P holds NaN/Inf");
+  require(projection(0, 0) > 0.0 && projection(1, 1) > 0.0,
+          "camera projection matrix P has a zero or negative focal length (fx = P[0] = " +
+              std::to_string(projection(0, 0)) + ", fy = P[5] = " + std::to_string(projection(1, 1)) +
+              "): the camera is not calibrated");
+  require(projection(2, 0) == 0.0 && projection(2, 1) == 0.0 && projection(2, 2) == 1.0,
+          "camera projection matrix P is not that of a rectified pinhole camera: its last row must be "
+          "(0, 0, 1, t)");
+  require(width > 0 && height > 0, "camera image size must be > 0, got " + std::to_string(width) + "x" +
+                                       std::to_string(height));
+}
+
+bool PinholeCamera::project(const Eigen::Vector3d& point, Eigen::Vector2d& pixel, double& depth) const
+{
+  const Eigen::Vector3d homogeneous = projection_ * point.homogeneous();
+  depth = homogeneous.z();
+  if (!(depth > 0.0))
+  {
+    return false;
+  }
+  pixel = homogeneous.head<2>() / depth;
+  return true;
+}
+
+void GridProjectionConfig::validate() const
+{
+  require(occupied_threshold > 0.0 && occupied_threshold <= 1.0,
+          "occupied_threshold must be in (0, 1], got " + std::to_string(occupied_threshold));
+  require(dynamic_ratio >= 0.0 && dynamic_ratio < 1.0,
+          "dynamic_ratio must be in [0, 1), got " + std::to_string(dynamic_ratio));
+  require(std::isfinite(min_depth) && min_depth > 0.0,
+          "min_depth must be finite and > 0 m, got " + std::to_string(min_depth));
+  require(std::isfinite(column_height) && column_height > 0.0,
+          "column_height must be finite and > 0 m, got " + std::to_string(column_height));
+  require(column_points >= 2 && column_points <= 100,
+          "column_points must be in [2, 100], got " + std::to_string(column_points));
+}
+
+void ProjectedCells::reserve(std::size_t points)
+{
+  for (std::vector<float>* array : {&u, &v, &depth, &x, &y, &vx, &vy, &p_static, &p_dynamic})
+  {
+    array->reserve(points);
+  }
+  state.reserve(points);
+}
+
+ProjectedPointsView ProjectedCells::view() const
+{
+  return pointsViewOf(*this);
+}
+
+ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,
+                           const ProjectionGeometry& geometry, const GridProjectionConfig& config)
+{
+  grid.validate();
+  config.validate();
+  require(allFinite(geometry.camera_from_grid), "camera ← grid transform holds NaN/Inf");
+  require(std::isfinite(geometry.ground_z), "ground_z must be finite, got " + std::to_string(geometry.ground_z));
+  require(std::isfinite(geometry.time_offset),
+          "time offset between image and grid must be finite, got " + std::to_string(geometry.time_offset));
+
+  // Grid frame point → homogeneous pixel in one 3×4 matrix.
+  const Eigen::Matrix<double, 3, 4> m = camera.projection() * geometry.camera_from_grid.matrix();
+  const double dt = config.predict_to_image_stamp ? geometry.time_offset : 0.0;
+  const int points_per_cell = config.column_mode ? config.column_points : 1;
+  const double column_step = config.column_mode ? config.column_height / (config.column_points - 1) : 0.0;
+  const double threshold = config.occupied_threshold;
+  const double width = camera.width();
+  const double height = camera.height();
+
+  ProjectedCells out;
+  // Reserve for every candidate cell first: one cheap pass instead of repeated reallocations.
+  std::size_t candidates = 0;
+  for (std::size_t i = 0; i < grid.size(); ++i)
+  {
+    candidates += (grid.p_static[i] >= threshold || grid.p_dynamic[i] >= threshold) ? 1 : 0;
+  }
+  out.reserve(candidates * static_cast<std::size_t>(points_per_cell));
+  for (std::uint32_t row = 0; row < grid.height; ++row)
+  {
+    const double cell_y = grid.origin_y + (row + 0.5) * grid.resolution;
+    const std::size_t row_start = static_cast<std::size_t>(row) * grid.width;
+    for (std::uint32_t col = 0; col < grid.width; ++col)
+    {
+      const std::size_t i = row_start + col;
+      const float ps = grid.p_static[i];
+      const float pd = grid.p_dynamic[i];
+      if (!std::isfinite(ps) || !std::isfinite(pd))
+      {
+        ++out.cells_invalid;
+        continue;
+      }
+      if (ps < threshold && pd < threshold)
+      {
+        continue;
+      }
+      ++out.cells_selected;
+      const CellState state = cellState(ps, pd, config);
+      float cvx = grid.vx[i];
+      float cvy = grid.vy[i];
+      double x = grid.origin_x + (col + 0.5) * grid.resolution;
+      double y = cell_y;
+      if (state == CellState::kDynamic)
+      {
+        if (!std::isfinite(cvx) || !std::isfinite(cvy))
+        {
+          ++out.cells_invalid;
+          continue;
+        }
+        x += cvx * dt;
+        y += cvy * dt;
+      }
+      else if (!std::isfinite(cvx) || !std::isfinite(cvy))
+      {
+        cvx = 0.F;
+        cvy = 0.F;
+      }
+      // The column is linear in z: the ground point plus k steps along the z column of m.
+      const double hu0 = m(0, 0) * x + m(0, 1) * y + m(0, 2) * geometry.ground_z + m(0, 3);
+      const double hv0 = m(1, 0) * x + m(1, 1) * y + m(1, 2) * geometry.ground_z + m(1, 3);
+      const double hw0 = m(2, 0) * x + m(2, 1) * y + m(2, 2) * geometry.ground_z + m(2, 3);
+      for (int k = 0; k < points_per_cell; ++k)
+      {
+        const double dz = k * column_step;
+        const double hu = hu0 + m(0, 2) * dz;
+        const double hv = hv0 + m(1, 2) * dz;
+        const double hw = hw0 + m(2, 2) * dz;
+        if (!(hw >= config.min_depth))
+        {
+          ++out.points_behind;
+          continue;
+        }
+        const double pu = hu / hw;
+        const double pv = hv / hw;
+        if (!(pu >= 0.0 && pv >= 0.0 && pu < width && pv < height))
+        {
+          ++out.points_outside;
+          continue;
+        }
+        out.u.push_back(static_cast<float>(pu));
+        out.v.push_back(static_cast<float>(pv));
+        out.depth.push_back(static_cast<float>(hw));
+        out.x.push_back(static_cast<float>(x));
+        out.y.push_back(static_cast<float>(y));
+        out.vx.push_back(cvx);
+        out.vy.push_back(cvy);
+        out.p_static.push_back(ps);
+        out.p_dynamic.push_back(pd);
+        out.state.push_back(static_cast<std::uint8_t>(state));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,212 @@
+#include "grid_vision_fusion/simulation/synthetic_scenario.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+template <typename T>
+T get(const YAML::Node& node, const std::string& key, const std::string& where)
+{
+  if (!node[key])
+  {
+    throw std::runtime_error(where + ": missing key '" + key + "'");
+  }
+  try
+  {
+    return node[key].as<T>();
+  }
+  catch (const YAML::Exception& e)
+  {
+    throw std::runtime_error(where + ": key '" + key + "' has the wrong type (" + e.msg + ")");
+  }
+}
+
+template <typename T>
+void getOptional(const YAML::Node& node, const std::string& key, const std::string& where, T& value)
+{
+  if (node[key])
+  {
+    value = get<T>(node, key, where);
+  }
+}
+
+Pose2D parsePose(const YAML::Node& node, const std::string& where)
+{
+  Pose2D pose;
+  pose.x = get<double>(node, "x", where);
+  pose.y = get<double>(node, "y", where);
+  getOptional(node, "yaw", where, pose.yaw);
+  return pose;
+}
+
+Trajectory parseMotion(const YAML::Node& node, const std::string& where)
+{
+  const int kinds = (node["parked"] ? 1 : 0) + (node["waypoints"] ? 1 : 0) + (node["constant_turn"] ? 1 : 0);
+  if (kinds != 1)
+  {
+    throw std::runtime_error(where + ": give exactly one of 'parked', 'waypoints', 'constant_turn'");
+  }
+  if (node["parked"])
+  {
+    return Trajectory::parked(parsePose(node["parked"], where + ".parked"));
+  }
+  if (node["constant_turn"])
+  {
+    const YAML::Node& turn = node["constant_turn"];
+    return Trajectory::constantTurn(parsePose(turn, where + ".constant_turn"),
+                                    get<double>(turn, "speed", where + ".constant_turn"),
+                                    get<double>(turn, "yaw_rate", where + ".constant_turn"));
+  }
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& p : node["waypoints"])
+  {
+    const auto values = p.as<std::vector<double>>();
+    if (values.size() != 3)
+    {
+      throw std::runtime_error(where + ".waypoints: every waypoint is [t, x, y]");
+    }
+    points.emplace_back(values[0], values[1], values[2]);
+  }
+  double initial_yaw = 0.0;
+  getOptional(node, "yaw", where, initial_yaw);
+  try
+  {
+    return Trajectory::waypoints(points, initial_yaw);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw std::runtime_error(where + ".waypoints: " + e.what());
+  }
+}
+
+std::uint32_t colorOr(const YAML::Node& node, const std::string& where, std::uint32_t fallback)
+{
+  if (!node["color"])
+  {
+    return fallback;
+  }
+  try
+  {
+    return parseColor(get<std::string>(node, "color", where));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw std::runtime_error(where + ": " + e.what());
+  }
+}
+
+void parseSize(const YAML::Node& node, const std::string& where, double& length, double& width, double& height)
+{
+  const auto size = get<std::vector<double>>(node, "size", where);
+  if (size.size() != 3 || size[0] <= 0.0 || size[1] <= 0.0 || size[2] <= 0.0)
+  {
+    throw std::runtime_error(where + ": size must be [length, width, height] > 0 [m]");
+  }
+  length = size[0];
+  width = size[1];
+  height = size[2];
+}
+}  // namespace
+
+int SyntheticScenario::frameCount() const { return static_cast<int>(std::lround(duration_s * frame_rate_hz)); }
+
+void SyntheticScenario::validate() const
+{
+  if (!(duration_s > 0.0))
+  {
+    throw std::invalid_argument("duration must be > 0 s");
+  }
+  if (!(frame_rate_hz > 0.0))
+  {
+    throw std::invalid_argument("frame_rate must be > 0 Hz");
+  }
+  if (frameCount() < 1)
+  {
+    throw std::invalid_argument("duration x frame_rate gives no frame");
+  }
+  lidar.validate();
+}
+
+std::uint32_t parseColor(const std::string& text)
+{
+  const std::string hex = !text.empty() && text[0] == '#' ? text.substr(1) : text;
+  if (hex.size() != 6 || hex.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+  {
+    throw std::invalid_argument("colour \"" + text + "\" is not #RRGGBB");
+  }
+  return static_cast<std::uint32_t>(std::stoul(hex, nullptr, 16));
+}
+
+SyntheticScenario loadScenario(const std::string& path)
+{
+  YAML::Node root;
+  try
+  {
+    root = YAML::LoadFile(path);
+  }
+  catch (const YAML::Exception& e)
+  {
+    throw std::runtime_error("cannot read scenario " + path + ": " + e.what());
+  }
+  SyntheticScenario scenario;
+  getOptional(root, "seed", path, scenario.seed);
+  getOptional(root, "duration", path, scenario.duration_s);
+  getOptional(root, "frame_rate", path, scenario.frame_rate_hz);
+  if (const YAML::Node road = root["road"])
+  {
+    getOptional(road, "center_y", path + ": road", scenario.road.center_y);
+    getOptional(road, "half_width", path + ": road", scenario.road.half_width);
+    getOptional(road, "lane_width", path + ": road", scenario.road.lane_width);
+  }
+  if (const YAML::Node lidar = root["lidar"])
+  {
+    const std::string where = path + ": lidar";
+    getOptional(lidar, "azimuth_steps", where, scenario.lidar.azimuth_steps);
+    getOptional(lidar, "range_noise_std", where, scenario.lidar.range_noise_std);
+    getOptional(lidar, "dropout", where, scenario.lidar.dropout);
+    getOptional(lidar, "min_range", where, scenario.lidar.min_range);
+    getOptional(lidar, "max_range", where, scenario.lidar.max_range);
+  }
+  if (!root["ego"])
+  {
+    throw std::runtime_error(path + ": missing key 'ego'");
+  }
+  scenario.ego = parseMotion(root["ego"], path + ": ego");
+  std::size_t index = 0;
+  for (const auto& node : root["actors"])
+  {
+    const std::string where = path + ": actors[" + std::to_string(index++) + "]";
+    Actor actor;
+    actor.type = get<std::string>(node, "type", where);
+    parseSize(node, where, actor.length, actor.width, actor.height);
+    actor.trajectory = parseMotion(node, where);
+    actor.color_rgb = colorOr(node, where, actor.color_rgb);
+    scenario.actors.push_back(actor);
+  }
+  index = 0;
+  for (const auto& node : root["scenery"])
+  {
+    const std::string where = path + ": scenery[" + std::to_string(index++) + "]";
+    SceneryBox box;
+    box.box.pose = parsePose(node, where);
+    parseSize(node, where, box.box.length, box.box.width, box.box.height);
+    box.color_rgb = colorOr(node, where, box.color_rgb);
+    scenario.scenery.push_back(box);
+  }
+  try
+  {
+    scenario.validate();
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  return scenario;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,263 @@
+// Unit tests of the evaluation: IoU, VOC AP and the Cartucho/mAP matching rules on small cases
+// computed by hand, and a 3-frame regression case with every figure worked out in comments.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "grid_vision_fusion/evaluation/evaluation.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+EvalObject object(const std::string& frame, const std::string& label, Motion motion, BoundingBox box,
+                  float score = 1.F)
+{
+  EvalObject o;
+  o.frame = frame;
+  o.label = label;
+  o.motion = motion;
+  o.box = box;
+  o.score = score;
+  o.longitudinal_m = 10.0;
+  return o;
+}
+
+EvalObject withState(EvalObject o, double x, double y, double vx, double vy)
+{
+  o.has_state = true;
+  o.x = x;
+  o.y = y;
+  o.vx = vx;
+  o.vy = vy;
+  return o;
+}
+
+const BoundingBox kA{0.F, 0.F, 9.F, 9.F};      // 10 x 10 pixels with the +1 convention
+const BoundingBox kFar{20.F, 20.F, 29.F, 29.F};
+
+EvaluationConfig perClass()
+{
+  EvaluationConfig config;
+  config.motion_classes = false;
+  return config;
+}
+
+const ClassMetrics& find(const EvaluationResult& result, const std::string& name)
+{
+  for (const auto& m : result.classes)
+  {
+    if (m.name == name)
+    {
+      return m;
+    }
+  }
+  throw std::runtime_error("no class " + name);
+}
+}  // namespace
+
+TEST(Evaluation, IouWithThePlusOneConvention)
+{
+  EXPECT_DOUBLE_EQ(boxIou(kA, kA), 1.0);
+  EXPECT_DOUBLE_EQ(boxIou(kA, kFar), 0.0);
+  // (0..9) vs (5..14) in x, same rows: overlap 5 x 10 = 50, union 100 + 100 − 50 = 150.
+  EXPECT_DOUBLE_EQ(boxIou(kA, BoundingBox{5.F, 0.F, 14.F, 9.F}), 50.0 / 150.0);
+  // Touching on one pixel column (x = 9): 1 x 10 = 10, union 190.
+  EXPECT_DOUBLE_EQ(boxIou(kA, BoundingBox{9.F, 0.F, 18.F, 9.F}), 10.0 / 190.0);
+}
+
+TEST(Evaluation, VocApAllPointInterpolation)
+{
+  EXPECT_DOUBLE_EQ(vocAveragePrecision({}, {}), 0.0);
+  EXPECT_DOUBLE_EQ(vocAveragePrecision({1.0}, {1.0}), 1.0);
+  // TP FP FP TP of 2 ground truths: rec .5 .5 .5 1, prec 1 .5 1/3 .5 → .5·1 + .5·.5 = .75.
+  EXPECT_DOUBLE_EQ(vocAveragePrecision({0.5, 0.5, 0.5, 1.0}, {1.0, 0.5, 1.0 / 3.0, 0.5}), 0.75);
+  EXPECT_THROW(vocAveragePrecision({0.5}, {}), std::invalid_argument);
+}
+
+TEST(Evaluation, DuplicatesAreFalsePositives)
+{
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), object("b", "car", Motion::kStatic, kA)};
+  const std::vector<EvalObject> det{object("a", "car", Motion::kStatic, kA, 0.9F),
+                                    object("a", "car", Motion::kStatic, kA, 0.8F),    // duplicate: FP
+                                    object("b", "car", Motion::kStatic, kFar, 0.8F),  // no overlap: FP
+                                    object("b", "car", Motion::kStatic, kA, 0.7F)};
+  const EvaluationResult r = evaluate(gt, det, perClass());
+  ASSERT_EQ(r.classes.size(), 1U);
+  const ClassMetrics& car = r.classes[0];
+  EXPECT_EQ(car.name, "car");
+  EXPECT_EQ(car.ground_truth, 2U);
+  EXPECT_EQ(car.true_positives, 2U);
+  EXPECT_EQ(car.false_positives, 2U);
+  EXPECT_DOUBLE_EQ(car.average_precision, 0.75);
+  EXPECT_DOUBLE_EQ(car.precision, 0.5);
+  EXPECT_DOUBLE_EQ(car.recall, 1.0);
+  EXPECT_NEAR(car.f1, 2.0 / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.mean_average_precision, 0.75);
+}
+
+TEST(Evaluation, TiesKeepTheInputOrder)
+{
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), object("b", "car", Motion::kStatic, kA)};
+  const EvalObject miss = object("a", "car", Motion::kStatic, kFar, 0.9F);
+  const EvalObject hit = object("b", "car", Motion::kStatic, kA, 0.9F);
+  // FP then TP: rec 0 .5, prec 0 .5 → AP = .5·.5 = .25.
+  EXPECT_DOUBLE_EQ(evaluate(gt, {miss, hit}, perClass()).classes[0].average_precision, 0.25);
+  // TP then FP: rec .5 .5, prec 1 .5 → AP = .5·1 = .5.
+  EXPECT_DOUBLE_EQ(evaluate(gt, {hit, miss}, perClass()).classes[0].average_precision, 0.5);
+}
+
+TEST(Evaluation, DifficultGroundTruthIsIgnored)
+{
+  EvalObject hard = object("a", "car", Motion::kStatic, kA);
+  hard.difficult = true;
+  const std::vector<EvalObject> gt{hard, object("b", "car", Motion::kStatic, kA)};
+  const std::vector<EvalObject> det{object("a", "car", Motion::kStatic, kA, 0.9F),  // on the difficult one
+                                    object("b", "car", Motion::kStatic, kA, 0.5F)};
+  const ClassMetrics car = evaluate(gt, det, perClass()).classes.at(0);
+  EXPECT_EQ(car.ground_truth, 1U);
+  EXPECT_EQ(car.detections, 1U);
+  EXPECT_EQ(car.true_positives, 1U);
+  EXPECT_EQ(car.false_positives, 0U);
+  EXPECT_DOUBLE_EQ(car.average_precision, 1.0);
+  EXPECT_DOUBLE_EQ(car.precision, 1.0);
+}
+
+TEST(Evaluation, NoFallbackToTheSecondBestMatch)
+{
+  // g1 = (0..9), g2 = (3..12). d1 = g1 exactly → TP. d2 = (1..10): IoU .818 with g1 (used),
+  // .667 with g2: it takes g1 and is a FP although g2 would have matched.
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA),
+                                   object("a", "car", Motion::kStatic, BoundingBox{3.F, 0.F, 12.F, 9.F})};
+  const std::vector<EvalObject> det{object("a", "car", Motion::kStatic, kA, 0.9F),
+                                    object("a", "car", Motion::kStatic, BoundingBox{1.F, 0.F, 10.F, 9.F}, 0.8F)};
+  const ClassMetrics car = evaluate(gt, det, perClass()).classes.at(0);
+  EXPECT_EQ(car.true_positives, 1U);
+  EXPECT_EQ(car.false_positives, 1U);
+  EXPECT_DOUBLE_EQ(car.average_precision, 0.5);  // rec .5 .5, prec 1 .5
+}
+
+TEST(Evaluation, ClassWithoutDetectionsCountsZeroInTheMap)
+{
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kDynamic, kA), object("a", "van", Motion::kStatic, kFar)};
+  const std::vector<EvalObject> det{object("a", "car", Motion::kDynamic, kA, 0.9F),
+                                    object("a", "truck", Motion::kStatic, kA, 0.9F)};  // class not in the GT
+  const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
+  EXPECT_DOUBLE_EQ(find(r, "dynamicCar").average_precision, 1.0);
+  EXPECT_DOUBLE_EQ(find(r, "staticVan").average_precision, 0.0);
+  EXPECT_EQ(find(r, "staticVan").ground_truth, 1U);
+  EXPECT_EQ(find(r, "staticTruck").false_positives, 1U);
+  EXPECT_DOUBLE_EQ(r.mean_average_precision, 0.5);  // (1 + 0) / 2: staticTruck is not a GT class
+  EXPECT_EQ(r.classes.back().name, "staticTruck");   // GT classes listed first
+}
+
+TEST(Evaluation, RangeFilterDropsFarObjects)
+{
+  EvalObject far_gt = object("a", "car", Motion::kStatic, kFar);
+  far_gt.longitudinal_m = 35.0;
+  EvalObject far_det = object("a", "car", Motion::kStatic, kA, 0.9F);
+  far_det.longitudinal_m = 30.5;
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), far_gt};
+  const ClassMetrics car = evaluate(gt, {far_det}, perClass()).classes.at(0);
+  EXPECT_EQ(car.ground_truth, 1U);
+  EXPECT_EQ(car.detections, 0U);
+  EvaluationConfig wide = perClass();
+  wide.max_longitudinal_m = 40.0;
+  EXPECT_EQ(evaluate(gt, {far_det}, wide).classes.at(0).ground_truth, 2U);
+}
+
+TEST(Evaluation, ErrorStatsQuantiles)
+{
+  const ErrorStats s = errorStats({1.0, 0.0, 0.0, 0.5, 0.0});
+  EXPECT_EQ(s.count, 5U);
+  EXPECT_DOUBLE_EQ(s.median, 0.0);
+  EXPECT_DOUBLE_EQ(s.mean, 0.3);
+  EXPECT_DOUBLE_EQ(s.p90, 0.8);  // rank 3.6 between 0.5 and 1.0
+  EXPECT_EQ(errorStats({}).count, 0U);
+}
+
+TEST(Evaluation, ConfigValidation)
+{
+  EvaluationConfig config;
+  config.iou_threshold = 0.0;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = EvaluationConfig{};
+  config.max_longitudinal_m = -1.0;
+  EXPECT_THROW(evaluate({}, {}, config), std::invalid_argument);
+  EXPECT_EQ(evaluationClass("car", Motion::kDynamic, true), "dynamicCar");
+  EXPECT_EQ(evaluationClass("van", Motion::kStatic, false), "van");
+}
+
+// Three frames, four GT classes; every figure below is worked out by hand.
+TEST(Evaluation, ThreeFrameRegression)
+{
+  const BoundingBox left{100.F, 100.F, 199.F, 199.F};
+  const BoundingBox right{300.F, 100.F, 399.F, 199.F};
+  const BoundingBox empty_road{500.F, 100.F, 599.F, 199.F};
+  const std::vector<EvalObject> gt{
+      withState(object("f0", "car", Motion::kDynamic, left), 10.0, 0.0, 5.0, 0.0),    // g1
+      withState(object("f0", "car", Motion::kStatic, right), 15.0, 5.0, 0.0, 0.0),    // g2
+      withState(object("f1", "car", Motion::kDynamic, left), 10.5, 0.0, 5.0, 0.0),    // g3
+      withState(object("f1", "van", Motion::kStatic, right), 20.0, -3.0, 0.0, 0.0),   // g4
+      withState(object("f2", "van", Motion::kDynamic, left), 12.0, 1.0, 0.0, 4.0)};   // g5
+  const std::vector<EvalObject> det{
+      withState(object("f0", "car", Motion::kDynamic, left, 0.9F), 10.4, 0.3, 4.0, 0.0),   // d1 → g1
+      withState(object("f0", "car", Motion::kDynamic, right, 0.6F), 15.0, 5.0, 1.0, 1.0),  // d2 → g2, wrong motion
+      withState(object("f1", "car", Motion::kDynamic, left, 0.8F), 10.5, 0.0, 0.0, 5.0),   // d3 → g3
+      withState(object("f1", "van", Motion::kStatic, right, 0.7F), 20.0, -2.0, 0.0, 0.0),  // d4 → g4
+      withState(object("f2", "van", Motion::kStatic, left, 0.5F), 12.0, 1.0, 0.0, 0.0),    // d5 → g5, wrong motion
+      withState(object("f2", "car", Motion::kStatic, empty_road, 0.4F), 30.0, 0.0, 0.0, 0.0)};  // d6: FP
+  const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
+
+  // dynamicCar: d1 TP, d3 TP, d2 FP (no dynamic car on the right) → rec .5 1 1, prec 1 1 2/3.
+  const ClassMetrics& dyn_car = find(r, "dynamicCar");
+  EXPECT_EQ(dyn_car.ground_truth, 2U);
+  EXPECT_EQ(dyn_car.true_positives, 2U);
+  EXPECT_EQ(dyn_car.false_positives, 1U);
+  EXPECT_DOUBLE_EQ(dyn_car.average_precision, 1.0);
+  EXPECT_NEAR(dyn_car.precision, 2.0 / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(dyn_car.recall, 1.0);
+  EXPECT_NEAR(dyn_car.f1, 0.8, 1e-12);
+  // staticCar: d6 FP, g2 missed.
+  const ClassMetrics& st_car = find(r, "staticCar");
+  EXPECT_EQ(st_car.false_positives, 1U);
+  EXPECT_DOUBLE_EQ(st_car.average_precision, 0.0);
+  EXPECT_DOUBLE_EQ(st_car.f1, 0.0);
+  // staticVan: d4 TP, d5 FP → rec 1 1, prec 1 .5 → AP 1, P .5, R 1, F1 2/3.
+  const ClassMetrics& st_van = find(r, "staticVan");
+  EXPECT_DOUBLE_EQ(st_van.average_precision, 1.0);
+  EXPECT_DOUBLE_EQ(st_van.precision, 0.5);
+  EXPECT_DOUBLE_EQ(st_van.recall, 1.0);
+  EXPECT_NEAR(st_van.f1, 2.0 / 3.0, 1e-12);
+  // dynamicVan: g5 never found.
+  const ClassMetrics& dyn_van = find(r, "dynamicVan");
+  EXPECT_EQ(dyn_van.detections, 0U);
+  EXPECT_DOUBLE_EQ(dyn_van.recall, 0.0);
+  EXPECT_DOUBLE_EQ(r.mean_average_precision, 0.5);  // (1 + 0 + 1 + 0) / 4
+  EXPECT_EQ(r.classes.size(), 4U);
+
+  // Matching by class alone: d1-g1, d3-g3, d2-g2 (cars), d4-g4, d5-g5 (vans); d6 unmatched.
+  const auto kU = static_cast<std::size_t>(Motion::kUnknown);
+  const auto kS = static_cast<std::size_t>(Motion::kStatic);
+  const auto kD = static_cast<std::size_t>(Motion::kDynamic);
+  EXPECT_EQ(r.motion_confusion[kD][kD], 2U);
+  EXPECT_EQ(r.motion_confusion[kS][kD], 1U);
+  EXPECT_EQ(r.motion_confusion[kS][kS], 1U);
+  EXPECT_EQ(r.motion_confusion[kD][kS], 1U);
+  EXPECT_EQ(r.motion_confusion[kU][kU], 0U);
+  // Position errors .5 0 0 1 0 → median 0, mean .3, p90 .8.
+  EXPECT_EQ(r.position_error_m.count, 5U);
+  EXPECT_NEAR(r.position_error_m.median, 0.0, 1e-12);
+  EXPECT_NEAR(r.position_error_m.mean, 0.3, 1e-12);
+  EXPECT_NEAR(r.position_error_m.p90, 0.8, 1e-12);
+  // Speed errors 1 0 √2 0 4 → sorted 0 0 1 √2 4: median 1, mean (5 + √2)/5, p90 √2 + .6(4 − √2).
+  EXPECT_NEAR(r.speed_error_mps.median, 1.0, 1e-12);
+  EXPECT_NEAR(r.speed_error_mps.mean, (5.0 + std::sqrt(2.0)) / 5.0, 1e-12);
+  EXPECT_NEAR(r.speed_error_mps.p90, std::sqrt(2.0) + 0.6 * (4.0 - std::sqrt(2.0)), 1e-12);
+  // Heading errors, both dynamic only: d1 0, d3 π/2 → median π/4, p90 .9·π/2.
+  EXPECT_EQ(r.heading_error_rad.count, 2U);
+  EXPECT_NEAR(r.heading_error_rad.median, M_PI / 4.0, 1e-12);
+  EXPECT_NEAR(r.heading_error_rad.p90, 0.9 * M_PI / 2.0, 1e-12);
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,135 @@
+// Tests of the evaluation outputs: JSON, Markdown tables, Cartucho folders and plots.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "grid_vision_fusion/evaluation/evaluation_report.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+namespace fs = std::filesystem;
+
+EvalObject object(const std::string& frame, const std::string& label, Motion motion, BoundingBox box, float score,
+                  double longitudinal_m = 10.0)
+{
+  EvalObject o;
+  o.frame = frame;
+  o.label = label;
+  o.motion = motion;
+  o.box = box;
+  o.score = score;
+  o.longitudinal_m = longitudinal_m;
+  return o;
+}
+
+std::string readFile(const fs::path& path)
+{
+  std::ifstream file(path);
+  std::stringstream content;
+  content << file.rdbuf();
+  return content.str();
+}
+
+const BoundingBox kA{10.F, 20.F, 109.F, 119.F};
+
+struct Case
+{
+  std::vector<EvalObject> gt{object("000000", "car", Motion::kDynamic, kA, 1.F),
+                             object("000001", "car", Motion::kStatic, kA, 1.F),
+                             object("000002", "van", Motion::kStatic, kA, 1.F, 45.0)};  // beyond 30 m
+  std::vector<EvalObject> det{object("000000", "car", Motion::kDynamic, kA, 0.875F),
+                              object("000001", "car", Motion::kDynamic, kA, 0.5F)};
+  EvaluationConfig config;
+  EvaluationResult result = evaluate(gt, det, config);
+};
+}  // namespace
+
+TEST(EvaluationReport, JsonCarriesTheFigures)
+{
+  const Case c;
+  const std::string json = metricsJson(c.result, c.config);
+  EXPECT_NE(json.find("\"mAP\": 0.500000"), std::string::npos) << json;  // dynamicCar 1, staticCar 0
+  EXPECT_NE(json.find("{\"name\": \"dynamicCar\", \"ground_truth\": 1, \"detections\": 2, \"true_positives\": 1, "
+                      "\"false_positives\": 1, \"precision\": 0.500000, \"recall\": 1.000000"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"counts\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]]"), std::string::npos) << json;
+}
+
+TEST(EvaluationReport, MarkdownTables)
+{
+  const Case c;
+  const std::string md = reportMarkdown(c.result, c.config);
+  EXPECT_NE(md.find("| dynamicCar | 50.0 | 100.0 | 66.7 | 1 | 1 | 1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| staticCar | 0.0 | 0.0 | 0.0 | 1 | 0 | 0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| **mAP** | **50.0** |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| static | 0 | 0 | 1 |"), std::string::npos) << md;
+}
+
+TEST(EvaluationReport, CartuchoFolders)
+{
+  const Case c;
+  const fs::path dir = fs::path(testing::TempDir()) / "cartucho";
+  fs::remove_all(dir);
+  writeCartuchoFolders(dir.string(), c.gt, c.det, c.config);
+  EXPECT_EQ(readFile(dir / "ground-truth" / "000000.txt"), "dynamicCar 10.00 20.00 109.00 119.00\n");
+  EXPECT_EQ(readFile(dir / "detection-results" / "000000.txt"), "dynamicCar 0.875000 10.00 20.00 109.00 119.00\n");
+  // The far van is filtered, but its frame still gets (empty) files in both folders.
+  ASSERT_TRUE(fs::exists(dir / "ground-truth" / "000002.txt"));
+  EXPECT_EQ(readFile(dir / "ground-truth" / "000002.txt"), "");
+  EXPECT_TRUE(fs::exists(dir / "detection-results" / "000002.txt"));
+}
+
+TEST(EvaluationReport, PrCurveIsDrawn)
+{
+  ClassMetrics m;
+  m.name = "dynamicCar";
+  m.average_precision = 1.0;
+  m.recall_curve = {0.5, 1.0};
+  m.precision_curve = {1.0, 1.0};
+  const cv::Mat plot = drawPrCurve(m);
+  ASSERT_EQ(plot.size(), cv::Size(640, 480));
+  // Precision 1 across the whole recall range: the curve runs along the top of the plot area
+  // (y = 50) from x = 70 to 610.
+  const cv::Vec3b at_mid = plot.at<cv::Vec3b>(50, 340);
+  EXPECT_EQ(at_mid, cv::Vec3b(200, 80, 0));
+}
+
+TEST(EvaluationReport, HistogramBars)
+{
+  // Values 0.1 ×3 and 1.0 ×1 with 10 bins up to 1.0: bin 1 holds 3, bin 9 holds 1.
+  const ErrorStats stats = errorStats({0.1, 0.1, 0.1, 1.0});
+  const cv::Mat plot = drawHistogram(stats, "position error", "m", 10);
+  // y axis up to ceil(3·1.1) = 4. Bar of bin 1 spans x ∈ [124, 178), 3/4 of 360 px above y = 410.
+  EXPECT_EQ(plot.at<cv::Vec3b>(300, 150), cv::Vec3b(200, 80, 0));
+  EXPECT_NE(plot.at<cv::Vec3b>(125, 150), cv::Vec3b(200, 80, 0));
+  // Bin 9 reaches 1/4·360 = 90 px: filled at y = 380, empty at y = 250.
+  EXPECT_EQ(plot.at<cv::Vec3b>(380, 590), cv::Vec3b(200, 80, 0));
+  EXPECT_NE(plot.at<cv::Vec3b>(250, 590), cv::Vec3b(200, 80, 0));
+  // Empty bin 5: nothing drawn above the axis.
+  EXPECT_NE(plot.at<cv::Vec3b>(400, 350), cv::Vec3b(200, 80, 0));
+  EXPECT_THROW(drawHistogram(stats, "x", "m", 0), std::invalid_argument);
+}
+
+TEST(EvaluationReport, WritesAllOutputs)
+{
+  const Case c;
+  const fs::path dir = fs::path(testing::TempDir()) / "evaluation_out";
+  fs::remove_all(dir);
+  writeEvaluationOutputs(dir.string(), c.result, c.config, c.gt, c.det);
+  for (const char* name : {"metrics.json", "report.md", "pr_dynamicCar.png", "pr_staticCar.png", "hist_position.png",
+                           "hist_speed.png", "hist_heading.png"})
+  {
+    EXPECT_TRUE(fs::exists(dir / name)) << name;
+  }
+  EXPECT_EQ(cv::imread((dir / "pr_dynamicCar.png").string()).size(), cv::Size(640, 480));
+  EXPECT_THROW(writeEvaluationOutputs("/proc/forbidden/x", c.result, c.config, c.gt, c.det), std::runtime_error);
+}
+
+}  // namespace grid_vision_fusion

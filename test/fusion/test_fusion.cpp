@@ -1,0 +1,358 @@
+// Unit tests of the fusion regions and the point-wise feature processing. Every expectation is
+// computed by hand in the comment next to it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "grid_vision_fusion/fusion/fusion.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+Detection makeDetection(float x_min, float y_min, float x_max, float y_max, const std::string& label = "car",
+                        float score = 0.9F)
+{
+  Detection d;
+  d.label = label;
+  d.score = score;
+  d.box = BoundingBox{x_min, y_min, x_max, y_max};
+  return d;
+}
+
+// Box (100, 100)–(200, 180): h = 80, band v ∈ (180 − 20, 180 + 20) = (160, 200), u ∈ (100, 200).
+const Detection kBox = makeDetection(100.F, 100.F, 200.F, 180.F);
+
+void addStatic(ProjectedPoints& pts, float u, float v, float x, float y)
+{
+  pts.add(u, v, x, y, 0.F, 0.F, CellState::kStatic);
+}
+void addDynamic(ProjectedPoints& pts, float u, float v, float x, float y, float vx, float vy)
+{
+  pts.add(u, v, x, y, vx, vy, CellState::kDynamic);
+}
+}  // namespace
+
+TEST(FusionRegion, BandLimitsFollowThePaper)
+{
+  const FusionConfig config;
+  const FusionRegion region = FusionRegion::fromBox(kBox.box, config);
+  // Paper: Y_low = (3·180 + 100)/4 = 160, Y_high = (5·180 − 100)/4 = 200.
+  EXPECT_FLOAT_EQ(region.v_min, 160.F);
+  EXPECT_FLOAT_EQ(region.v_max, 200.F);
+  EXPECT_FLOAT_EQ(region.u_min, 100.F);
+  EXPECT_FLOAT_EQ(region.u_max, 200.F);
+}
+
+TEST(FusionRegion, BandFractionsAreParameters)
+{
+  FusionConfig config;
+  config.band_above = 0.5;  // 40 px above 180
+  config.band_below = 0.1;  // 8 px below 180
+  const FusionRegion region = FusionRegion::fromBox(kBox.box, config);
+  EXPECT_FLOAT_EQ(region.v_min, 140.F);
+  EXPECT_FLOAT_EQ(region.v_max, 188.F);
+}
+
+TEST(FusionRegion, StrictInequalitiesAtTheBorders)
+{
+  const FusionRegion region = FusionRegion::fromBox(kBox.box, FusionConfig{});
+  EXPECT_TRUE(region.contains(150.F, 180.F));
+  EXPECT_TRUE(region.contains(100.01F, 160.01F));
+  EXPECT_TRUE(region.contains(199.99F, 199.99F));
+  // Exactly on each border: outside.
+  EXPECT_FALSE(region.contains(100.F, 180.F));
+  EXPECT_FALSE(region.contains(200.F, 180.F));
+  EXPECT_FALSE(region.contains(150.F, 160.F));
+  EXPECT_FALSE(region.contains(150.F, 200.F));
+  // Inside the box but above the band (the body of the car): outside.
+  EXPECT_FALSE(region.contains(150.F, 120.F));
+  EXPECT_FALSE(region.contains(kNaN, 180.F));
+  EXPECT_FALSE(region.contains(150.F, kNaN));
+}
+
+TEST(FusionConfig, ValidateRejectsBadValues)
+{
+  FusionConfig config;
+  EXPECT_NO_THROW(config.validate());
+  config.band_above = -0.1;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = FusionConfig{};
+  config.band_below = std::nan("");
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = FusionConfig{};
+  config.min_points = 0;
+  try
+  {
+    config.validate();
+    FAIL() << "min_points = 0 accepted";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("min_points"), std::string::npos);
+  }
+}
+
+TEST(FusionConfig, TieRuleNames)
+{
+  EXPECT_EQ(tieRuleFromString("static"), TieRule::kStatic);
+  EXPECT_EQ(tieRuleFromString("dynamic"), TieRule::kDynamic);
+  EXPECT_EQ(tieRuleFromString("unknown"), TieRule::kUnknown);
+  EXPECT_EQ(toString(TieRule::kDynamic), "dynamic");
+  EXPECT_THROW(tieRuleFromString("Static"), std::invalid_argument);
+}
+
+TEST(Median, OddAndEvenCounts)
+{
+  std::vector<double> odd{5.0, 1.0, 3.0};
+  EXPECT_DOUBLE_EQ(median(odd), 3.0);
+  std::vector<double> even{4.0, 1.0, 3.0, 10.0};  // sorted 1 3 4 10 → (3 + 4)/2
+  EXPECT_DOUBLE_EQ(median(even), 3.5);
+  std::vector<double> one{-2.0};
+  EXPECT_DOUBLE_EQ(median(one), -2.0);
+  std::vector<double> empty;
+  EXPECT_THROW(median(empty), std::invalid_argument);
+}
+
+TEST(DecideMotion, LargerCardinalityTiesAndMinimum)
+{
+  FusionConfig config;
+  EXPECT_EQ(decideMotion(3, 1, config), Motion::kStatic);
+  EXPECT_EQ(decideMotion(1, 3, config), Motion::kDynamic);
+  EXPECT_EQ(decideMotion(0, 0, config), Motion::kUnknown);
+  EXPECT_EQ(decideMotion(2, 2, config), Motion::kStatic);  // default tie rule
+  config.tie_rule = TieRule::kDynamic;
+  EXPECT_EQ(decideMotion(2, 2, config), Motion::kDynamic);
+  config.tie_rule = TieRule::kUnknown;
+  EXPECT_EQ(decideMotion(2, 2, config), Motion::kUnknown);
+  config.min_points = 4;
+  EXPECT_EQ(decideMotion(3, 1, config), Motion::kUnknown);  // winner 3 < 4
+  EXPECT_EQ(decideMotion(1, 4, config), Motion::kDynamic);  // winner 4 >= 4
+}
+
+TEST(Fuse, EmptyRegionIsDiscarded)
+{
+  ProjectedPoints pts;
+  addStatic(pts, 150.F, 120.F, 10.F, 0.F);  // inside the box, above the band
+  addStatic(pts, 300.F, 180.F, 10.F, 0.F);  // right of the box
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  EXPECT_TRUE(result.objects.empty());
+  EXPECT_EQ(result.invalid_points, 0U);
+}
+
+TEST(Fuse, NoDetectionsAndNoPoints)
+{
+  EXPECT_TRUE(fuse({}, ProjectedPoints{}.view(), FusionConfig{}).objects.empty());
+  EXPECT_TRUE(fuse({kBox}, ProjectedPoints{}.view(), FusionConfig{}).objects.empty());
+}
+
+TEST(Fuse, OnlyStaticPointsOddMedian)
+{
+  ProjectedPoints pts;
+  addStatic(pts, 120.F, 170.F, 10.F, 2.F);
+  addStatic(pts, 150.F, 180.F, 12.F, 1.F);
+  addStatic(pts, 180.F, 190.F, 11.F, 5.F);
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 1U);
+  const FusedObject& o = result.objects[0];
+  EXPECT_EQ(o.detection_index, 0U);
+  EXPECT_EQ(o.motion, Motion::kStatic);
+  EXPECT_EQ(o.static_points, 3U);
+  EXPECT_EQ(o.dynamic_points, 0U);
+  EXPECT_DOUBLE_EQ(o.x, 11.0);  // median of 10, 12, 11
+  EXPECT_DOUBLE_EQ(o.y, 2.0);   // median of 2, 1, 5
+  EXPECT_DOUBLE_EQ(o.vx, 0.0);
+  EXPECT_DOUBLE_EQ(o.vy, 0.0);
+  EXPECT_DOUBLE_EQ(o.heading, 0.0);
+}
+
+TEST(Fuse, DynamicMajorityEvenMedians)
+{
+  ProjectedPoints pts;
+  addDynamic(pts, 110.F, 170.F, 20.F, 1.F, 4.F, 1.F);
+  addDynamic(pts, 120.F, 175.F, 21.F, 2.F, 6.F, 3.F);
+  addDynamic(pts, 130.F, 185.F, 22.F, 3.F, 5.F, 2.F);
+  addStatic(pts, 140.F, 190.F, 30.F, 4.F);
+  // Position over all 4 points: x sorted 20 21 22 30 → 21.5; y sorted 1 2 3 4 → 2.5.
+  // Velocity over the 3 dynamic points: vx sorted 4 5 6 → 5; vy sorted 1 2 3 → 2.
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 1U);
+  const FusedObject& o = result.objects[0];
+  EXPECT_EQ(o.motion, Motion::kDynamic);
+  EXPECT_EQ(o.static_points, 1U);
+  EXPECT_EQ(o.dynamic_points, 3U);
+  EXPECT_DOUBLE_EQ(o.x, 21.5);
+  EXPECT_DOUBLE_EQ(o.y, 2.5);
+  EXPECT_DOUBLE_EQ(o.vx, 5.0);
+  EXPECT_DOUBLE_EQ(o.vy, 2.0);
+  EXPECT_NEAR(o.heading, std::atan2(2.0, 5.0), 1e-12);
+  EXPECT_NEAR(o.speed(), std::sqrt(29.0), 1e-12);
+}
+
+TEST(Fuse, EvenVelocityMedian)
+{
+  ProjectedPoints pts;
+  addDynamic(pts, 110.F, 170.F, 0.F, 0.F, 1.F, -1.F);
+  addDynamic(pts, 120.F, 170.F, 0.F, 0.F, 3.F, -5.F);
+  // vx (1 + 3)/2 = 2, vy (−1 − 5)/2 = −3
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_DOUBLE_EQ(result.objects[0].vx, 2.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].vy, -3.0);
+}
+
+TEST(Fuse, TieFollowsTheRule)
+{
+  ProjectedPoints pts;
+  addStatic(pts, 110.F, 170.F, 1.F, 1.F);
+  addDynamic(pts, 120.F, 170.F, 3.F, 3.F, 2.F, 0.F);
+  FusionConfig config;
+  EXPECT_EQ(fuse({kBox}, pts.view(), config).objects.at(0).motion, Motion::kStatic);
+  config.tie_rule = TieRule::kDynamic;
+  const FusedObject dynamic = fuse({kBox}, pts.view(), config).objects.at(0);
+  EXPECT_EQ(dynamic.motion, Motion::kDynamic);
+  EXPECT_DOUBLE_EQ(dynamic.vx, 2.0);
+  config.tie_rule = TieRule::kUnknown;
+  const FusedObject unknown = fuse({kBox}, pts.view(), config).objects.at(0);
+  EXPECT_EQ(unknown.motion, Motion::kUnknown);
+  EXPECT_DOUBLE_EQ(unknown.vx, 0.0);
+  EXPECT_DOUBLE_EQ(unknown.x, 2.0);  // position still reported: (1 + 3)/2
+}
+
+TEST(Fuse, MinimumPointCountGivesUnknown)
+{
+  ProjectedPoints pts;
+  addDynamic(pts, 110.F, 170.F, 5.F, 6.F, 2.F, 0.F);
+  FusionConfig config;
+  config.min_points = 2;
+  const FusionResult result = fuse({kBox}, pts.view(), config);
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_EQ(result.objects[0].motion, Motion::kUnknown);
+  EXPECT_EQ(result.objects[0].dynamic_points, 1U);
+  EXPECT_DOUBLE_EQ(result.objects[0].x, 5.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].heading, 0.0);
+}
+
+TEST(Fuse, HeadingInAllFourQuadrants)
+{
+  struct Case
+  {
+    float vx, vy;
+    double heading;
+  };
+  const Case cases[] = {{1.F, 1.F, M_PI / 4},           // quadrant I
+                        {-1.F, 1.F, 3 * M_PI / 4},      // quadrant II
+                        {-1.F, -1.F, -3 * M_PI / 4},    // quadrant III
+                        {1.F, -1.F, -M_PI / 4},         // quadrant IV
+                        {0.F, 2.F, M_PI / 2},           // +y axis
+                        {-3.F, 0.F, M_PI}};             // −x axis
+  for (const Case& c : cases)
+  {
+    ProjectedPoints pts;
+    addDynamic(pts, 150.F, 180.F, 0.F, 0.F, c.vx, c.vy);
+    const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+    ASSERT_EQ(result.objects.size(), 1U);
+    EXPECT_NEAR(result.objects[0].heading, c.heading, 1e-6) << "v = (" << c.vx << ", " << c.vy << ")";
+  }
+}
+
+TEST(Fuse, OverlappingBoxesShareByDefault)
+{
+  // Near car: box (100,100)-(200,180), band v in (160, 200).
+  // Far car partly hidden behind it: box (150,120)-(250,170), h = 50, band v in (157.5, 182.5).
+  const Detection near_car = kBox;
+  const Detection far_car = makeDetection(150.F, 120.F, 250.F, 170.F, "van", 0.8F);
+  ProjectedPoints pts;
+  addStatic(pts, 170.F, 175.F, 10.F, 0.F);          // in both bands
+  addDynamic(pts, 230.F, 165.F, 25.F, 0.F, 3.F, 0.F);  // far band only
+  addStatic(pts, 120.F, 190.F, 9.F, 1.F);           // near band only
+
+  const FusionResult shared = fuse({near_car, far_car}, pts.view(), FusionConfig{});
+  ASSERT_EQ(shared.objects.size(), 2U);
+  EXPECT_EQ(shared.objects[0].detection_index, 0U);
+  EXPECT_EQ(shared.objects[0].static_points, 2U);
+  EXPECT_EQ(shared.objects[0].dynamic_points, 0U);
+  EXPECT_EQ(shared.objects[1].detection_index, 1U);
+  EXPECT_EQ(shared.objects[1].static_points, 1U);
+  EXPECT_EQ(shared.objects[1].dynamic_points, 1U);
+
+  // Exclusive: the shared point belongs to the box whose bottom is lowest (near car, 180 > 170).
+  FusionConfig exclusive;
+  exclusive.exclusive_assignment = true;
+  const FusionResult owned = fuse({far_car, near_car}, pts.view(), exclusive);
+  ASSERT_EQ(owned.objects.size(), 2U);
+  EXPECT_EQ(owned.objects[0].detection_index, 0U);  // far car, listed first
+  EXPECT_EQ(owned.objects[0].static_points, 0U);
+  EXPECT_EQ(owned.objects[0].dynamic_points, 1U);
+  EXPECT_EQ(owned.objects[0].motion, Motion::kDynamic);
+  EXPECT_EQ(owned.objects[1].static_points, 2U);
+}
+
+TEST(Fuse, ExclusiveTieOnBottomGoesToHigherScore)
+{
+  const Detection low_score = makeDetection(100.F, 100.F, 200.F, 180.F, "car", 0.5F);
+  const Detection high_score = makeDetection(120.F, 140.F, 220.F, 180.F, "van", 0.9F);
+  ProjectedPoints pts;
+  addStatic(pts, 150.F, 178.F, 1.F, 1.F);  // in both bands
+  FusionConfig config;
+  config.exclusive_assignment = true;
+  const FusionResult result = fuse({low_score, high_score}, pts.view(), config);
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_EQ(result.objects[0].detection_index, 1U);
+}
+
+TEST(Fuse, NaNCoordinatesAreIgnored)
+{
+  ProjectedPoints pts;
+  addStatic(pts, kNaN, 180.F, 1.F, 1.F);
+  addStatic(pts, 150.F, kNaN, 1.F, 1.F);
+  addStatic(pts, 150.F, 180.F, kNaN, 1.F);
+  addStatic(pts, 150.F, 180.F, 1.F, std::numeric_limits<float>::infinity());
+  addDynamic(pts, 150.F, 180.F, 1.F, 1.F, kNaN, 0.F);  // dynamic without a velocity
+  addStatic(pts, 150.F, 180.F, 4.F, 6.F);             // the only valid point
+  pts.state.push_back(7);                             // an invalid state on a 7th point
+  for (auto* array : {&pts.u, &pts.v, &pts.x, &pts.y, &pts.vx, &pts.vy})
+  {
+    array->push_back(150.F);
+  }
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  EXPECT_EQ(result.invalid_points, 6U);
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_EQ(result.objects[0].static_points, 1U);
+  EXPECT_EQ(result.objects[0].dynamic_points, 0U);
+  EXPECT_DOUBLE_EQ(result.objects[0].x, 4.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].y, 6.0);
+}
+
+TEST(Fuse, StaticPointVelocityIsNotUsed)
+{
+  ProjectedPoints pts;
+  pts.add(150.F, 180.F, 1.F, 2.F, kNaN, kNaN, CellState::kStatic);  // velocity irrelevant
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  EXPECT_EQ(result.invalid_points, 0U);
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_EQ(result.objects[0].motion, Motion::kStatic);
+}
+
+TEST(CheckFusionInputs, AcceptsGoodAndNamesTheFault)
+{
+  EXPECT_EQ(checkFusionInputs({kBox}, 640, 480, 640, 480), "");
+  EXPECT_EQ(checkFusionInputs({}, 640, 480, 640, 480), "");
+  EXPECT_NE(checkFusionInputs({kBox}, 640, 480, 1242, 375).find("image size mismatch"), std::string::npos);
+  const std::string swapped = checkFusionInputs({makeDetection(200.F, 100.F, 100.F, 180.F)}, 640, 480, 640, 480);
+  EXPECT_NE(swapped.find("x_min > x_max"), std::string::npos) << swapped;
+  EXPECT_NE(swapped.find("detection 0"), std::string::npos) << swapped;
+  const std::string outside = checkFusionInputs({kBox, makeDetection(600.F, 100.F, 700.F, 180.F)}, 640, 480, 640, 480);
+  EXPECT_NE(outside.find("detection 1"), std::string::npos) << outside;
+  EXPECT_NE(outside.find("outside"), std::string::npos) << outside;
+  const std::string nan_box = checkFusionInputs({makeDetection(kNaN, 100.F, 200.F, 180.F)}, 640, 480, 640, 480);
+  EXPECT_NE(nan_box.find("non-finite"), std::string::npos) << nan_box;
+  // Half a pixel past the border is tolerated (detectors clip to the pixel grid).
+  EXPECT_EQ(checkFusionInputs({makeDetection(0.F, 0.F, 640.5F, 480.F)}, 640, 480, 640, 480), "");
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,111 @@
+// rostest: kitti_replay.launch on a short synthetic drive. Collects the objects of the whole
+// chain and checks their motion labels against the drive's ground truth (tracklets + OXTS):
+// at least 80 % of the matched objects right, moving actors dynamic, parked ones static.
+#include <gtest/gtest.h>
+
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+
+#include <mutex>
+
+#include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/evaluation/evaluation.h"
+#include "grid_vision_fusion/evaluation/kitti_ground_truth.h"
+#include "grid_vision_fusion/offline/detection_bag.h"
+#include "wait_for.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+using test::waitFor;
+
+TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
+{
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  std::string drive_dir;
+  ASSERT_TRUE(pnh.getParam("drive", drive_dir));
+  int frames = 0;
+  ASSERT_TRUE(pnh.getParam("frames", frames));
+  const KittiDrive drive = KittiDrive::read(drive_dir, "", true);
+  ASSERT_EQ(drive.frameCount(), frames);
+
+  std::mutex mutex;
+  std::vector<DetectedObjectArray::ConstPtr> received;
+  ros::Subscriber sub = nh.subscribe<DetectedObjectArray>("/objects", 100, [&](const DetectedObjectArray::ConstPtr& m) {
+    std::lock_guard<std::mutex> lock(mutex);
+    received.push_back(m);
+  });
+  // The bag is played with a start delay; wait for its end (the last frame's objects or a
+  // pause of 8 s once objects came).
+  const ros::Time last_stamp(drive.stamps.back().sec, drive.stamps.back().nsec);
+  ros::WallTime last_arrival = ros::WallTime::now();
+  std::size_t count = 0;
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (received.size() != count)
+        {
+          count = received.size();
+          last_arrival = ros::WallTime::now();
+        }
+        const bool at_end = !received.empty() && received.back()->header.stamp >= last_stamp;
+        return at_end || (count > 0 && (ros::WallTime::now() - last_arrival).toSec() > 8.0);
+      },
+      90.0))
+      << "no objects from the chain";
+  ASSERT_GE(received.size(), static_cast<std::size_t>(frames) / 2) << "the chain lost most frames";
+
+  // The objects as evaluation detections, frame by frame.
+  const KittiGroundTruthConfig labels;
+  const std::vector<GroundTruthObject> truth = trackletGroundTruth(drive, labels);
+  const std::vector<double> times = drive.frameTimes();
+  std::vector<EvalObject> detections;
+  for (const auto& msg : received)
+  {
+    EXPECT_EQ(msg->header.frame_id, "world");
+    const int frame = nearestFrame(times, msg->header.stamp.toSec(), 0.05);
+    ASSERT_GE(frame, 0) << "objects stamped " << msg->header.stamp << " match no image";
+    const Eigen::Isometry3d velo_from_world = drive.worldFromVelo(frame).inverse();
+    for (const DetectedObject& o : msg->objects)
+    {
+      detections.push_back(toEvalObject(o, kittiFrameName(frame), velo_from_world, labels.labelOf(o.label)));
+    }
+  }
+  EvaluationConfig config;
+  config.max_longitudinal_m = 40.0;
+  const EvaluationResult result = evaluate(evalObjects(truth), detections, config);
+  const auto& c = result.motion_confusion;
+  const auto kS = static_cast<std::size_t>(Motion::kStatic);
+  const auto kD = static_cast<std::size_t>(Motion::kDynamic);
+  std::size_t matched = 0;
+  for (const auto& row : c)
+  {
+    for (std::size_t n : row)
+    {
+      matched += n;
+    }
+  }
+  const std::size_t right = c[kS][kS] + c[kD][kD];
+  ::testing::Test::RecordProperty("matched", static_cast<int>(matched));
+  ::testing::Test::RecordProperty("right", static_cast<int>(right));
+  ASSERT_GE(matched, 40U) << "too few objects matched the ground truth";
+  EXPECT_GE(static_cast<double>(right), 0.8 * static_cast<double>(matched))
+      << "static->static " << c[kS][kS] << ", static->dynamic " << c[kS][kD] << ", dynamic->dynamic " << c[kD][kD]
+      << ", dynamic->static " << c[kD][kS];
+  // Both kinds are mostly right on their own.
+  EXPECT_GE(c[kS][kS], 4 * c[kS][kD]) << "parked objects called dynamic";
+  EXPECT_GE(c[kD][kD], c[kD][kS]) << "moving objects called static";
+}
+
+}  // namespace
+}  // namespace grid_vision_fusion
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_kitti_replay");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,99 @@
+# The tests, folder by folder as the sources (included from the package's CMakeLists.txt).
+
+# Test helpers: the tiny Darknet model writer (detection tests and the detector rostest) and the
+# box-world lidar (grid tests).
+add_library(gvf_tiny_darknet STATIC EXCLUDE_FROM_ALL test/detection/tiny_darknet.cpp)
+_gvf_common(gvf_tiny_darknet)
+set_target_properties(gvf_tiny_darknet PROPERTIES POSITION_INDEPENDENT_CODE ON)
+add_library(gvf_box_world_lidar STATIC EXCLUDE_FROM_ALL test/grid/box_world_lidar.cpp)
+_gvf_common(gvf_box_world_lidar)
+target_link_libraries(gvf_box_world_lidar PUBLIC grid_vision_fusion_simulation)
+
+# --- core: one gtest per folder, linking the core library only --------------------------------
+gvf_gtest(test_grid
+  SOURCES test/grid/test_grid_map.cpp test/grid/test_inverse_sensor_model.cpp test/grid/test_dynamic_grid_filter.cpp
+  LINK grid_vision_fusion_core gvf_box_world_lidar)
+gvf_gtest(test_detection
+  SOURCES test/detection/test_yolo_detector.cpp test/detection/test_kitti_labels.cpp
+    test/detection/test_detection_replay.cpp
+  LINK grid_vision_fusion_core gvf_tiny_darknet
+  DEFINITIONS GVF_MODEL_DIR="${PROJECT_SOURCE_DIR}/models/yolo")
+gvf_gtest(test_projection
+  SOURCES test/projection/test_grid_projection.cpp
+  LINK grid_vision_fusion_core grid_vision_fusion_kitti)
+gvf_gtest(test_fusion
+  SOURCES test/fusion/test_fusion.cpp test/fusion/test_overlay.cpp
+  LINK grid_vision_fusion_core)
+
+# --- workshop libraries ------------------------------------------------------------------------
+gvf_gtest(test_kitti
+  SOURCES test/kitti/test_kitti_calibration.cpp test/kitti/test_kitti_raw.cpp
+  LINK grid_vision_fusion_kitti)
+gvf_gtest(test_evaluation
+  SOURCES test/evaluation/test_evaluation.cpp test/evaluation/test_evaluation_report.cpp
+    test/evaluation/test_kitti_ground_truth.cpp
+  LINK grid_vision_fusion_evaluation)
+gvf_gtest(test_simulation
+  SOURCES test/simulation/test_synthetic_world.cpp test/simulation/test_synthetic_camera.cpp
+    test/simulation/test_synthetic_scenario.cpp test/simulation/test_synthetic_drive.cpp
+  LINK grid_vision_fusion_simulation)
+gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp LINK grid_vision_fusion_cli)
+
+# --- ROS layer and offline (no master) ---------------------------------------------------------
+gvf_gtest(test_ros
+  SOURCES test/ros/test_fusion_conversions.cpp test/ros/test_param_source.cpp
+  LINK grid_vision_fusion_ros grid_vision_fusion_offline)
+gvf_gtest(test_offline
+  SOURCES test/offline/test_detection_bag.cpp test/offline/test_kitti_bag_writer.cpp
+  LINK grid_vision_fusion_offline
+  DEFINITIONS GVF_EVALUATE_TOOL="$<TARGET_FILE:evaluate>" GVF_KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>"
+  DEPENDS evaluate kitti_to_bag)
+gvf_gtest(test_tools
+  SOURCES test/tools/test_bag_summary.cpp
+  LINK grid_vision_fusion_offline
+  DEFINITIONS BAG_SUMMARY="$<TARGET_FILE:bag_summary>"
+  DEPENDS bag_summary)
+
+# --- nodelets in a manager (rostest) -----------------------------------------------------------
+gvf_rostest(test_dynamic_grid_nodelet LAUNCH test/nodelets/dynamic_grid_nodelet.test
+  SOURCES test/nodelets/test_dynamic_grid_nodelet.cpp)
+gvf_rostest(test_yolo_detector_nodelet LAUNCH test/nodelets/yolo_detector_nodelet.test
+  SOURCES test/nodelets/test_yolo_detector_nodelet.cpp LINK gvf_tiny_darknet)
+gvf_rostest(test_yolo_replay_nodelet LAUNCH test/nodelets/yolo_replay_nodelet.test
+  SOURCES test/nodelets/test_yolo_replay_nodelet.cpp)
+gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_nodelet.test
+  SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
+gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test
+  SOURCES test/nodelets/test_fusion_nodelet.cpp)
+gvf_rostest(test_zero_copy LAUNCH test/nodelets/zero_copy.test SOURCES test/nodelets/test_zero_copy.cpp)
+gvf_rostest(test_pipeline_equivalence LAUNCH test/nodelets/pipeline_equivalence.test
+  SOURCES test/nodelets/test_pipeline_equivalence.cpp LINK grid_vision_fusion_offline grid_vision_fusion_simulation)
+
+# The whole chain through kitti_replay.launch on a short synthetic drive made at build time.
+set(GVF_REPLAY_TEST_DIR ${CMAKE_CURRENT_BINARY_DIR}/kitti_replay_test)
+add_custom_command(OUTPUT ${GVF_REPLAY_TEST_DIR}/drive.bag
+  COMMAND ${CMAKE_COMMAND} -E remove_directory ${GVF_REPLAY_TEST_DIR}/kitti
+  COMMAND make_synthetic_drive --output ${GVF_REPLAY_TEST_DIR}/kitti
+    --scenario ${PROJECT_SOURCE_DIR}/test/data/kitti_replay_scenario.yaml
+    --calibration ${PROJECT_SOURCE_DIR}/data/calibration/2011_09_26
+  COMMAND kitti_to_bag --quiet ${GVF_REPLAY_TEST_DIR}/kitti/2011_09_26/2011_09_26_drive_9001_sync
+    ${GVF_REPLAY_TEST_DIR}/drive.bag
+  DEPENDS make_synthetic_drive kitti_to_bag test/data/kitti_replay_scenario.yaml
+  COMMENT "Generating the synthetic drive of the kitti_replay rostest")
+add_custom_target(kitti_replay_test_drive DEPENDS ${GVF_REPLAY_TEST_DIR}/drive.bag)
+catkin_add_executable_with_gtest(test_kitti_replay test/nodelets/test_kitti_replay.cpp EXCLUDE_FROM_ALL)
+_gvf_common(test_kitti_replay)
+target_link_libraries(test_kitti_replay grid_vision_fusion_offline)
+add_dependencies(tests test_kitti_replay kitti_replay_test_drive)
+add_rostest(test/nodelets/kitti_replay.test ARGS work_dir:=${GVF_REPLAY_TEST_DIR}
+  DEPENDENCIES test_kitti_replay kitti_replay_test_drive)
+
+# Every launch file must parse and reference existing packages and nodes. Includes that load
+# into a manager get one.
+foreach(launch dynamic_grid yolo_detector grid_projection fusion)
+  roslaunch_add_file_check(launch/${launch}.launch manager:=manager)
+endforeach()
+roslaunch_add_file_check(launch/perception.launch)
+roslaunch_add_file_check(launch/kitti_replay.launch)
+roslaunch_add_file_check(launch/kitti_replay.launch model_weights:=yolov3.weights bag:=drive.bag record:=out.bag)
+roslaunch_add_file_check(test/nodelets USE_TEST_DEPENDENCIES)
