@@ -147,8 +147,13 @@ int run(const Options& o)
   detector.set("replay/file_pattern", o.replay_file_pattern);
   detector.set("replay/frame_index", o.replay_frame_index);
 
-  gvf::PipelineConfig config = gvf::pipelineConfigFromParams(grid, detector, projection, fusion);
+  std::vector<std::string> unknown;
+  gvf::PipelineConfig config = gvf::pipelineConfigFromParams(grid, detector, projection, fusion, &unknown);
   config.max_tf_wait = o.max_tf_wait;
+  for (const std::string& warning : unknown)
+  {
+    std::cerr << "run_pipeline: warning: " << warning << "\n";
+  }
 
   const std::string tmp = o.output + ".tmp";
   rosbag::Bag out(tmp, rosbag::bagmode::Write);
@@ -170,7 +175,7 @@ int run(const Options& o)
   {
     std::cerr << "run_pipeline: detector: " << warning << "\n";
   }
-  std::cerr << "run_pipeline: " << o.bag << " -> " << o.output << " (detector " << config.backend << ")\n";
+  std::cerr << "run_pipeline: " << o.bag << " -> " << o.output << " (detector " << config.detector.backend << ")\n";
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::unique_ptr<gvf::ProgressBar> bar;
@@ -220,7 +225,7 @@ int run(const Options& o)
                 summary.wall_s);
     std::printf("  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
                 "fusion %.3f, sum %.2f\n",
-                grid, config.backend.c_str(), det, proj, fus, grid + det + proj + fus);
+                grid, config.detector.backend.c_str(), det, proj, fus, grid + det + proj + fus);
     std::printf("  wall per frame (reading, all stages, writing): %.2f ms, %.1f frames/s, %.2fx real time\n",
                 wall_per_frame, 1e3 / wall_per_frame,
                 summary.wall_s > 0 ? summary.bag_duration_s / summary.wall_s : 0.0);

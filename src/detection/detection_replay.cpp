@@ -197,6 +197,12 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
   return detections;
 }
 
+std::string DetectionReplay::description() const
+{
+  return "replay of " + config_.directory + "/" + config_.file_pattern + ", frame index from the " +
+         toString(config_.index_source);
+}
+
 void DetectionReplay::setScoreThreshold(double score_threshold)
 {
   DetectionReplayConfig updated = config_;

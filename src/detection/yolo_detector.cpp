@@ -173,6 +173,24 @@ struct LayerShape
 
 }  // namespace
 
+YoloOutputLayout yoloOutputLayoutFromString(const std::string& name)
+{
+  if (name == "pixels")
+  {
+    return YoloOutputLayout::kPixels;
+  }
+  if (name == "opencv_region")
+  {
+    return YoloOutputLayout::kOpenCvRegion;
+  }
+  throw std::invalid_argument("onnx_layout must be \"pixels\" or \"opencv_region\", got \"" + name + "\"");
+}
+
+std::string toString(YoloOutputLayout layout)
+{
+  return layout == YoloOutputLayout::kPixels ? "pixels" : "opencv_region";
+}
+
 ResizeMode resizeModeFromString(const std::string& name)
 {
   if (name == "letterbox")
@@ -693,6 +711,13 @@ void YoloDetector::selectBackend()
 std::string YoloDetector::backendDescription() const
 {
   return backend_used_ + "/" + target_used_;
+}
+
+std::string YoloDetector::description() const
+{
+  return config_.model_path + " (" + std::to_string(class_names_.size()) + " classes), input " +
+         std::to_string(input_size_.width) + "x" + std::to_string(input_size_.height) + " " +
+         toString(config_.resize_mode) + ", " + backendDescription();
 }
 
 std::int64_t YoloDetector::flops()

@@ -20,10 +20,7 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
-#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
-#include "grid_vision_fusion/ros/grid_conversions.h"
-#include "grid_vision_fusion/ros/params.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/grid_stage.h"
 
 namespace grid_vision_fusion
 {
@@ -45,12 +42,9 @@ class DynamicGridNodelet : public nodelet::Nodelet
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   boost::mutex connect_mutex_;
-  std::mutex filter_mutex_;  // the filter, its statistics and the field-error flag
-  std::unique_ptr<DynamicGridFilter> filter_;
-  std::string fixed_frame_ = "world";
-  bool lazy_ = true;
-  int queue_size_ = 5;
-  double expected_rate_ = 10.0;
+  std::mutex filter_mutex_;  // the stage, its statistics and the field-error flag
+  std::unique_ptr<GridStage> stage_;
+  std::string fixed_frame_;
   bool field_error_reported_ = false;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
@@ -83,22 +77,23 @@ void DynamicGridNodelet::onInit()
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  DynamicGridConfig config;
+  std::vector<std::string> unknown;
   try
   {
-    config = dynamicGridConfigFromParams(pnh);
-    const DynamicGridNodeOptions options = dynamicGridNodeOptionsFromParams(NodeHandleParamSource(pnh));
-    fixed_frame_ = options.fixed_frame;
-    lazy_ = options.lazy;
-    queue_size_ = options.queue_size;
-    expected_rate_ = options.expected_rate;
-    filter_ = std::make_unique<DynamicGridFilter>(config);
+    stage_ = std::make_unique<GridStage>(DynamicGridParams::fromParams(NodeHandleParamSource(pnh), &unknown));
   }
   catch (const std::exception& e)
   {
     NODELET_ERROR("dynamic_grid: invalid configuration, the nodelet stays inactive: %s", e.what());
     return;
   }
+  for (const std::string& warning : unknown)
+  {
+    NODELET_WARN("dynamic_grid: %s", warning.c_str());
+  }
+  const DynamicGridParams& params = stage_->params();
+  const DynamicGridConfig& config = params.filter;
+  fixed_frame_ = params.fixed_frame;
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
   reconfigure_server_->setCallback(boost::bind(&DynamicGridNodelet::reconfigureCb, this,
@@ -107,15 +102,15 @@ void DynamicGridNodelet::onInit()
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   tf_filter_ = std::make_unique<TfFilter>(sub_points_, *tf_buffer_, fixed_frame_,
-                                          static_cast<std::uint32_t>(queue_size_), nh);
+                                          static_cast<std::uint32_t>(params.queue_size), nh);
   tf_filter_->registerCallback(boost::bind(&DynamicGridNodelet::cloudCb, this, boost::placeholders::_1));
   tf_filter_->registerFailureCallback(
       boost::bind(&DynamicGridNodelet::tfFailureCb, this, boost::placeholders::_1, boost::placeholders::_2));
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   updater_->setHardwareID("none");
-  min_rate_ = 0.5 * expected_rate_;
-  max_rate_ = 2.0 * expected_rate_;
+  min_rate_ = 0.5 * params.expected_rate;
+  max_rate_ = 2.0 * params.expected_rate;
   input_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
       diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 10), "input rate");
   updater_->add(*input_rate_);
@@ -132,19 +127,19 @@ void DynamicGridNodelet::onInit()
   pub_grid_ = nh.advertise<DynamicGrid>("grid", 1, connect_cb, connect_cb);
   pub_occupancy_ = nh.advertise<nav_msgs::OccupancyGrid>("grid/occupancy", 1, connect_cb, connect_cb);
   pub_cells_ = nh.advertise<sensor_msgs::PointCloud2>("grid/cells", 1, connect_cb, connect_cb);
-  if (!lazy_)
+  if (!params.lazy)
   {
-    sub_points_.subscribe(nh, "points", static_cast<std::uint32_t>(queue_size_));
+    sub_points_.subscribe(nh, "points", static_cast<std::uint32_t>(params.queue_size));
   }
   NODELET_INFO("dynamic_grid: %dx%d cells of %.2f m in %s, %d particles, seed %u, %s", config.width,
                config.height, config.resolution, fixed_frame_.c_str(), config.particle_count, config.seed,
-               lazy_ ? "lazy" : "always subscribed");
+               params.lazy ? "lazy" : "always subscribed");
 }
 
 void DynamicGridNodelet::connectCb()
 {
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  if (!lazy_)
+  if (!stage_->params().lazy)
   {
     return;
   }
@@ -156,21 +151,21 @@ void DynamicGridNodelet::connectCb()
   }
   else if (!sub_points_.getSubscriber())
   {
-    sub_points_.subscribe(getNodeHandle(), "points", static_cast<std::uint32_t>(queue_size_));
+    sub_points_.subscribe(getNodeHandle(), "points", static_cast<std::uint32_t>(stage_->params().queue_size));
   }
 }
 
 void DynamicGridNodelet::reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t /*level*/)
 {
   std::lock_guard<std::mutex> lock(filter_mutex_);
-  DynamicGridConfig thresholds = filter_->config();
+  DynamicGridConfig thresholds = stage_->filter().config();
   thresholds.dynamic_threshold = reconfigure.dynamic_threshold;
   thresholds.min_dynamic_speed = reconfigure.min_dynamic_speed;
   thresholds.mahalanobis_threshold = reconfigure.mahalanobis_threshold;
   thresholds.occupied_threshold = reconfigure.occupied_threshold;
   try
   {
-    filter_->setClassification(thresholds);
+    stage_->setClassification(thresholds);
   }
   catch (const std::invalid_argument& e)
   {
@@ -198,26 +193,24 @@ void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& c
 void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg)
 {
   const auto start = std::chrono::steady_clock::now();
-  PointCloudView view;
-  const std::string field_error = pointCloudViewOf(*cloud_msg, view);
   std::lock_guard<std::mutex> lock(filter_mutex_);
   input_rate_->tick();
-  if (!field_error.empty())
+  DynamicGridCycle cycle;
+  try
+  {
+    cycle = stage_->update(*cloud_msg, *tf_buffer_);
+  }
+  catch (const UnusableMessage& e)
   {
     if (!field_error_reported_)
     {
       NODELET_ERROR(
           "dynamic_grid: cannot use the clouds of %s (frame '%s'): %s; they need float32 x, y, z "
           "fields. Reported once; these clouds are dropped.",
-          sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), field_error.c_str());
+          sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), e.what());
       field_error_reported_ = true;
     }
     return;
-  }
-  Eigen::Isometry3d world_from_sensor;
-  try
-  {
-    world_from_sensor = scanPose(*tf_buffer_, fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp);
   }
   catch (const tf2::TransformException& e)
   {
@@ -227,7 +220,6 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
                           cloud_msg->header.frame_id.c_str(), e.what());
     return;
   }
-  const DynamicGridCycle cycle = filter_->update(view, world_from_sensor, cloud_msg->header.stamp.toSec());
   if (cycle.reset)
   {
     ++resets_;
@@ -248,20 +240,17 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   particles_in_use_ = cycle.particles_in_use;
   ++scans_;
 
-  std_msgs::Header header;
-  header.stamp = cloud_msg->header.stamp;
-  header.frame_id = fixed_frame_;
   if (pub_occupancy_.getNumSubscribers() > 0)
   {
-    pub_occupancy_.publish(occupancyGridToMsg(*filter_, header));
+    pub_occupancy_.publish(stage_->occupancyMsg());
   }
   if (pub_cells_.getNumSubscribers() > 0)
   {
-    pub_cells_.publish(gridCellsToCloud(*filter_, header));
+    pub_cells_.publish(stage_->cellsMsg());
   }
   if (pub_grid_.getNumSubscribers() > 0)
   {
-    pub_grid_.publish(dynamicGridToMsg(*filter_, header));
+    pub_grid_.publish(stage_->gridMsg());
   }
   last_processing_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -270,7 +259,7 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
 
 void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
-  const double budget_ms = 1e3 / expected_rate_;
+  const double budget_ms = 1e3 / stage_->params().expected_rate;
   if (scans_ == 0)
   {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "no scan processed yet");
@@ -287,7 +276,7 @@ void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("processing time last [ms]", last_processing_ms_);
   status.add("processing time max [ms]", max_processing_ms_);
   status.add("particles in use", particles_in_use_);
-  status.add("particles", filter_->config().particle_count);
+  status.add("particles", stage_->filter().config().particle_count);
   status.add("scans processed", scans_);
   status.add("points dropped (NaN/Inf)", invalid_points_);
   status.add("scans dropped (tf)", tf_drops_);

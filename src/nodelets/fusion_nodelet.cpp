@@ -23,11 +23,9 @@
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/FusionReconfigureConfig.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/fusion/fusion.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
-#include "grid_vision_fusion/ros/params.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/fusion_stage.h"
 
 namespace grid_vision_fusion
 {
@@ -54,11 +52,8 @@ class FusionNodelet : public nodelet::Nodelet
                       const FusionConfig& config);
 
   boost::mutex connect_mutex_;
-  std::mutex config_mutex_;
-  FusionConfig config_;
-  bool lazy_ = true;
-  int queue_size_ = 10;
-  int image_cache_size_ = 10;
+  std::mutex stage_mutex_;  // the stage (its configuration changes with dynamic_reconfigure)
+  std::unique_ptr<FusionStage> stage_;
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   message_filters::Subscriber<Detection2DArray> sub_detections_;
@@ -80,29 +75,22 @@ void FusionNodelet::onInit()
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  bool approximate_sync = false;
+  std::vector<std::string> unknown;
   try
   {
-    config_ = fusionConfigFromParams(pnh);
-    readParam(pnh, "lazy", lazy_);
-    readParam(pnh, "approximate_sync", approximate_sync);
-    readParam(pnh, "queue_size", queue_size_);
-    readParam(pnh, "image_cache_size", image_cache_size_);
-    if (queue_size_ < 1)
-    {
-      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
-    }
-    if (image_cache_size_ < 1)
-    {
-      throw std::invalid_argument("parameter ~image_cache_size must be >= 1, got " +
-                                  std::to_string(image_cache_size_));
-    }
+    stage_ = std::make_unique<FusionStage>(FusionParams::fromParams(NodeHandleParamSource(pnh), &unknown));
   }
   catch (const std::exception& e)
   {
     NODELET_ERROR("fusion: invalid configuration, the nodelet stays inactive: %s", e.what());
     return;
   }
+  for (const std::string& warning : unknown)
+  {
+    NODELET_WARN("fusion: %s", warning.c_str());
+  }
+  const FusionParams& params = stage_->params();
+  const bool approximate_sync = params.approximate_sync;
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
   reconfigure_server_->setCallback(
@@ -111,14 +99,14 @@ void FusionNodelet::onInit()
   if (approximate_sync)
   {
     approximate_sync_ = std::make_unique<message_filters::Synchronizer<ApproximatePolicy>>(
-        ApproximatePolicy(queue_size_), sub_detections_, sub_grid_);
+        ApproximatePolicy(params.queue_size), sub_detections_, sub_grid_);
     approximate_sync_->registerCallback(
         boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
   }
   else
   {
     exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
-        ExactPolicy(queue_size_), sub_detections_, sub_grid_);
+        ExactPolicy(params.queue_size), sub_detections_, sub_grid_);
     exact_sync_->registerCallback(
         boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
   }
@@ -130,25 +118,26 @@ void FusionNodelet::onInit()
   pub_objects_ = nh.advertise<DetectedObjectArray>("objects", 1, connect_cb, connect_cb);
   pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("objects/markers", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("objects/image", 1, image_connect_cb, image_connect_cb);
-  if (!lazy_)
+  if (!params.lazy)
   {
     // connectCb takes the lock itself; subscribe without it here.
-    sub_detections_.subscribe(nh, "detections", queue_size_);
-    sub_grid_.subscribe(nh, "projected_grid", queue_size_);
+    sub_detections_.subscribe(nh, "detections", params.queue_size);
+    sub_grid_.subscribe(nh, "projected_grid", params.queue_size);
     sub_image_ = it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
   NODELET_INFO("fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, "
                "%s sync, %s",
-               config_.band_above, config_.band_below, config_.min_points,
-               toString(config_.tie_rule).c_str(), approximate_sync ? "approximate" : "exact",
-               lazy_ ? "lazy" : "always subscribed");
+               params.fusion.band_above, params.fusion.band_below, params.fusion.min_points,
+               toString(params.fusion.tie_rule).c_str(), approximate_sync ? "approximate" : "exact",
+               params.lazy ? "lazy" : "always subscribed");
 }
 
 void FusionNodelet::connectCb()
 {
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  if (!lazy_)
+  const FusionParams& params = stage_->params();
+  if (!params.lazy)
   {
     return;
   }
@@ -163,8 +152,8 @@ void FusionNodelet::connectCb()
   }
   else if (!sub_detections_.getSubscriber())
   {
-    sub_detections_.subscribe(nh, "detections", queue_size_);
-    sub_grid_.subscribe(nh, "projected_grid", queue_size_);
+    sub_detections_.subscribe(nh, "detections", params.queue_size);
+    sub_grid_.subscribe(nh, "projected_grid", params.queue_size);
   }
   if (!overlay_wanted)
   {
@@ -182,32 +171,26 @@ void FusionNodelet::connectCb()
 
 void FusionNodelet::reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t /*level*/)
 {
-  FusionConfig updated;
-  {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    updated = config_;
-  }
+  std::lock_guard<std::mutex> lock(stage_mutex_);
+  FusionConfig updated = stage_->config();
   updated.band_above = reconfigure.band_above;
   updated.band_below = reconfigure.band_below;
   updated.min_points = reconfigure.min_points;
   try
   {
-    updated.validate();
+    stage_->setConfig(updated);
   }
   catch (const std::invalid_argument& e)
   {
     NODELET_ERROR("fusion: reconfiguration refused: %s", e.what());
-    return;
   }
-  std::lock_guard<std::mutex> lock(config_mutex_);
-  config_ = updated;
 }
 
 void FusionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
 {
   std::lock_guard<std::mutex> lock(image_mutex_);
   image_cache_.push_back(image_msg);
-  while (image_cache_.size() > static_cast<std::size_t>(image_cache_size_))
+  while (image_cache_.size() > static_cast<std::size_t>(stage_->params().image_cache_size))
   {
     image_cache_.pop_front();
   }
@@ -217,14 +200,12 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
                              const ProjectedGrid::ConstPtr& grid_msg)
 {
   FusionConfig config;
-  {
-    std::lock_guard<std::mutex> lock(config_mutex_);
-    config = config_;
-  }
   FusedPair pair;
   try
   {
-    pair = fusePair(*detections_msg, *grid_msg, config);
+    std::lock_guard<std::mutex> lock(stage_mutex_);
+    config = stage_->config();
+    pair = stage_->fuse(*detections_msg, *grid_msg);
   }
   catch (const std::invalid_argument& e)
   {

@@ -22,12 +22,10 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/projection/grid_projection.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
-#include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/projection_stage.h"
 
 namespace grid_vision_fusion
 {
@@ -53,9 +51,7 @@ class GridProjectionNodelet : public nodelet::Nodelet
   void publishMatchedOverlay();
 
   boost::mutex connect_mutex_;
-  GridProjectionConfig config_;
-  GridProjectionNodeOptions options_;
-  int queue_size_ = 5;
+  std::unique_ptr<ProjectionStage> stage_;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -82,28 +78,28 @@ void GridProjectionNodelet::onInit()
 {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
+  std::vector<std::string> unknown;
   try
   {
-    const NodeHandleParamSource params(pnh);
-    config_ = gridProjectionConfigFromParams(params);
-    options_ = gridProjectionNodeOptionsFromParams(params);
-    readParam(params, "queue_size", queue_size_);
-    if (queue_size_ < 1)
-    {
-      throw std::invalid_argument("parameter ~queue_size must be >= 1, got " + std::to_string(queue_size_));
-    }
+    stage_ = std::make_unique<ProjectionStage>(GridProjectionParams::fromParams(NodeHandleParamSource(pnh), &unknown));
   }
   catch (const std::exception& e)
   {
     NODELET_ERROR("grid_projection: invalid configuration, the nodelet stays inactive: %s", e.what());
     return;
   }
+  for (const std::string& warning : unknown)
+  {
+    NODELET_WARN("grid_projection: %s", warning.c_str());
+  }
+  const GridProjectionParams& params = stage_->params();
+  const GridProjectionConfig& config = params.projection;
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   // The target frames (grid frame, ground_frame) are set when the first grid arrives; no
   // camera_info is handed to the filter before that.
-  tf_filter_ = std::make_unique<TfFilter>(*tf_buffer_, "", static_cast<std::uint32_t>(queue_size_), nh);
+  tf_filter_ = std::make_unique<TfFilter>(*tf_buffer_, "", static_cast<std::uint32_t>(params.queue_size), nh);
   tf_filter_->setTargetFrames({});
   tf_filter_->registerCallback(boost::bind(&GridProjectionNodelet::cameraInfoCb, this, boost::placeholders::_1));
   tf_filter_->registerFailureCallback(
@@ -115,27 +111,28 @@ void GridProjectionNodelet::onInit()
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("projected_grid/image", 1, image_connect_cb, image_connect_cb);
-  if (!options_.lazy)
+  if (!params.lazy)
   {
     // connectCb takes the lock itself; subscribe without it here.
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(queue_size_),
+    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(params.queue_size),
                              &GridProjectionNodelet::cameraInfoInCb, this);
     sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
   NODELET_INFO("grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
                "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
-               config_.occupied_threshold, config_.dynamic_ratio, options_.ground_height,
-               options_.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
-               options_.ground_frame.c_str(), config_.column_mode ? "column mode" : "ground points only",
-               config_.predict_to_image_stamp ? "on" : "off", options_.max_grid_age, options_.lazy ? "lazy" : "always subscribed");
+               config.occupied_threshold, config.dynamic_ratio, params.ground_height,
+               params.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
+               params.ground_frame.c_str(), config.column_mode ? "column mode" : "ground points only",
+               config.predict_to_image_stamp ? "on" : "off", params.max_grid_age, params.lazy ? "lazy" : "always subscribed");
 }
 
 void GridProjectionNodelet::connectCb()
 {
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  if (!options_.lazy)
+  const GridProjectionParams& params = stage_->params();
+  if (!params.lazy)
   {
     return;
   }
@@ -153,7 +150,7 @@ void GridProjectionNodelet::connectCb()
   else if (!sub_grid_)
   {
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(queue_size_),
+    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(params.queue_size),
                              &GridProjectionNodelet::cameraInfoInCb, this);
   }
   if (!overlay_wanted)
@@ -190,12 +187,7 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
   if (grid_msg->header.frame_id != tf_target_frame_)
   {
     tf_target_frame_ = grid_msg->header.frame_id;
-    std::vector<std::string> targets{tf_target_frame_};
-    if (!options_.ground_frame.empty() && options_.ground_frame != tf_target_frame_)
-    {
-      targets.push_back(options_.ground_frame);
-    }
-    tf_filter_->setTargetFrames(targets);
+    tf_filter_->setTargetFrames(stage_->tfFrames(tf_target_frame_));
   }
 }
 
@@ -246,7 +238,7 @@ void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr
   std::size_t invalid_cells = 0;
   try
   {
-    projected = projectGridIntoCamera(*grid, *info_msg, *tf_buffer_, options_, config_, &invalid_cells);
+    projected = stage_->project(*grid, *info_msg, *tf_buffer_, &invalid_cells);
   }
   catch (const ProjectionSkipped& e)
   {
@@ -267,7 +259,7 @@ void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr
     {
       std::lock_guard<std::mutex> lock(overlay_mutex_);
       projections_.push_back(projected);
-      while (projections_.size() > static_cast<std::size_t>(options_.image_cache_size))
+      while (projections_.size() > static_cast<std::size_t>(stage_->params().image_cache_size))
       {
         projections_.pop_front();
       }
@@ -282,7 +274,7 @@ void GridProjectionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_ms
   {
     std::lock_guard<std::mutex> lock(overlay_mutex_);
     images_.push_back(image_msg);
-    while (images_.size() > static_cast<std::size_t>(options_.image_cache_size))
+    while (images_.size() > static_cast<std::size_t>(stage_->params().image_cache_size))
     {
       images_.pop_front();
     }

@@ -20,11 +20,9 @@
 
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/YoloDetectorReconfigureConfig.h"
-#include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
-#include "grid_vision_fusion/ros/params.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/detector_stage.h"
 
 namespace grid_vision_fusion
 {
@@ -75,14 +73,11 @@ private:
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   boost::mutex connect_mutex_;
-  bool lazy_ = true;
-  bool replay_backend_ = false;
-  std::unique_ptr<YoloDetector> detector_;  // used by one process() at a time
-  std::unique_ptr<DetectionReplay> replay_;
+  std::unique_ptr<DetectorStage> stage_;  // detect() by one process() at a time; frameIndex() by imageCb
 
   std::mutex config_mutex_;  // guards the thresholds
-  double score_threshold_ = 0.5;
-  double nms_threshold_ = 0.45;
+  double score_threshold_ = 0.0;
+  double nms_threshold_ = 0.0;
 
   // The frame slot between the image callback and the inference on the multi-threaded queue.
   std::mutex slot_mutex_;
@@ -120,46 +115,30 @@ void YoloDetectorNodelet::onInit()
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  std::string backend = "opencv_dnn";
+  std::vector<std::string> unknown;
   try
   {
-    readParam(pnh, "lazy", lazy_);
-    readParam(pnh, "backend", backend);
-    if (backend == "opencv_dnn")
-    {
-      const YoloDetectorConfig config = yoloDetectorConfigFromParams(pnh);
-      score_threshold_ = config.score_threshold;
-      nms_threshold_ = config.nms_threshold;
-      detector_ = std::make_unique<YoloDetector>(config);
-    }
-    else if (backend == "replay")
-    {
-      replay_backend_ = true;
-      const DetectionReplayConfig config = detectionReplayConfigFromParams(pnh);
-      score_threshold_ = config.score_threshold;
-      replay_ = std::make_unique<DetectionReplay>(config);
-    }
-    else
-    {
-      throw std::invalid_argument("parameter " + pnh.resolveName("backend") +
-                                  " must be \"opencv_dnn\" or \"replay\", got \"" + backend + "\"");
-    }
+    stage_ = std::make_unique<DetectorStage>(DetectorParams::fromParams(NodeHandleParamSource(pnh), &unknown));
   }
   catch (const std::exception& e)
   {
     NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s", e.what());
     return;
   }
-  if (detector_)
+  for (const std::string& warning : unknown)
   {
-    for (const std::string& warning : detector_->warnings())
-    {
-      NODELET_WARN("yolo_detector: %s", warning.c_str());
-    }
+    NODELET_WARN("yolo_detector: %s", warning.c_str());
   }
+  for (const std::string& warning : stage_->detector().warnings())
+  {
+    NODELET_WARN("yolo_detector: %s", warning.c_str());
+  }
+  const DetectorParams& params = stage_->params();
+  score_threshold_ = params.yolo.score_threshold;
+  nms_threshold_ = params.yolo.nms_threshold;
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  updater_->setHardwareID(replay_backend_ ? "replay " + replay_->config().directory : detector_->config().model_path);
+  updater_->setHardwareID(params.backend == "replay" ? "replay " + params.replay.directory : params.yolo.model_path);
   updater_->add("yolo_detector", this, &YoloDetectorNodelet::diagnose);
   diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.1, updater_->getPeriod())),
                                           [this](const ros::WallTimerEvent&) { updater_->update(); });
@@ -174,31 +153,19 @@ void YoloDetectorNodelet::onInit()
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_detections_ = nh.advertise<Detection2DArray>("detections", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("detections/image", 1, image_connect_cb, image_connect_cb);
-  if (!lazy_)
+  if (!params.lazy)
   {
     sub_image_ = it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
-  if (replay_backend_)
-  {
-    NODELET_INFO("yolo_detector: replaying %s/%s, frame index from the %s, %s", replay_->config().directory.c_str(),
-                 replay_->config().file_pattern.c_str(), toString(replay_->config().index_source).c_str(),
-                 lazy_ ? "lazy" : "always subscribed");
-  }
-  else
-  {
-    NODELET_INFO("yolo_detector: %s (%zu classes), input %dx%d %s, %s, score >= %.2f, NMS IoU %.2f, %s",
-                 detector_->config().model_path.c_str(), detector_->classNames().size(), detector_->inputSize().width,
-                 detector_->inputSize().height, toString(detector_->config().resize_mode).c_str(),
-                 detector_->backendDescription().c_str(), score_threshold_, nms_threshold_,
-                 lazy_ ? "lazy" : "always subscribed");
-  }
+  NODELET_INFO("yolo_detector: %s, score >= %.2f, NMS IoU %.2f, %s", stage_->detector().description().c_str(),
+               score_threshold_, nms_threshold_, params.lazy ? "lazy" : "always subscribed");
 }
 
 void YoloDetectorNodelet::connectCb()
 {
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  if (!lazy_)
+  if (!stage_->params().lazy)
   {
     return;
   }
@@ -224,18 +191,15 @@ void YoloDetectorNodelet::reconfigureCb(YoloDetectorReconfigureConfig& reconfigu
 void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
 {
   std::int64_t frame_index = -1;
-  if (replay_backend_)
+  try
   {
-    try
-    {
-      frame_index = replay_->nextFrameIndex(image_msg->header.seq);
-    }
-    catch (const std::out_of_range& e)
-    {
-      NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f skipped: %s",
-                             sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), e.what());
-      return;
-    }
+    frame_index = stage_->frameIndex(*image_msg);
+  }
+  catch (const std::out_of_range& e)
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f skipped: %s",
+                           sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), e.what());
+    return;
   }
   bool schedule = false;
   {
@@ -288,14 +252,8 @@ bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detectio
   }
   try
   {
-    if (replay_backend_)
-    {
-      replay_->setScoreThreshold(score_threshold);
-      detections = replay_->detectionsOf(frame.frame_index, image.width, image.height);
-      return true;
-    }
-    detector_->setThresholds(score_threshold, nms_threshold);
-    detections = detectInImage(*detector_, frame.image);
+    stage_->setThresholds(score_threshold, nms_threshold);
+    detections = stage_->detect(frame.image, frame.frame_index);
     return true;
   }
   catch (const std::exception& e)
@@ -375,7 +333,8 @@ void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   }
   dropped_reported_ = frames_dropped_;
   failed_reported_ = frames_failed_;
-  status.add("backend", replay_backend_ ? std::string("replay") : "opencv_dnn " + detector_->backendDescription());
+  status.add("backend", stage_->params().backend);
+  status.add("detector", stage_->detector().description());
   status.add("frames received", frames_received_);
   status.add("frames processed", frames_processed_);
   status.add("frames dropped", frames_dropped_);

@@ -26,34 +26,26 @@ double elapsedMs(const std::chrono::steady_clock::time_point& start)
 }  // namespace
 
 PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSource& detector,
-                                        const ParamSource& projection, const ParamSource& fusion)
+                                        const ParamSource& projection, const ParamSource& fusion,
+                                        std::vector<std::string>* unknown)
 {
   PipelineConfig config;
-  config.grid = dynamicGridConfigFromParams(grid);
-  config.grid_node = dynamicGridNodeOptionsFromParams(grid);
-  readParam(detector, "backend", config.backend);
-  if (config.backend == "opencv_dnn")
+  std::vector<std::string> node_unknown;
+  auto collect = [&]
   {
-    config.yolo = yoloDetectorConfigFromParams(detector);
-  }
-  else if (config.backend == "replay")
-  {
-    config.replay = detectionReplayConfigFromParams(detector);
-  }
-  else
-  {
-    throw std::invalid_argument("parameter " + detector.describe("backend") +
-                                " must be \"opencv_dnn\" or \"replay\", got \"" + config.backend + "\"");
-  }
-  config.projection = gridProjectionConfigFromParams(projection);
-  config.projection_node = gridProjectionNodeOptionsFromParams(projection);
-  config.fusion = fusionConfigFromParams(fusion);
-  readParam(fusion, "queue_size", config.fusion_queue_size);
-  if (config.fusion_queue_size < 1)
-  {
-    throw std::invalid_argument("parameter " + fusion.describe("queue_size") + " must be >= 1, got " +
-                                std::to_string(config.fusion_queue_size));
-  }
+    if (unknown)
+    {
+      unknown->insert(unknown->end(), node_unknown.begin(), node_unknown.end());
+    }
+  };
+  config.grid = DynamicGridParams::fromParams(grid, &node_unknown);
+  collect();
+  config.detector = DetectorParams::fromParams(detector, &node_unknown);
+  collect();
+  config.projection = GridProjectionParams::fromParams(projection, &node_unknown);
+  collect();
+  config.fusion = FusionParams::fromParams(fusion, &node_unknown);
+  collect();
   return config;
 }
 
@@ -64,34 +56,17 @@ Pipeline::Pipeline(const PipelineConfig& config, PipelineOutputs outputs)
   {
     throw std::invalid_argument("max_tf_wait must be >= 0 s");
   }
-  if (config_.fusion_queue_size < 1)
+  if (config_.fusion.queue_size < 1)
   {
-    throw std::invalid_argument("fusion_queue_size must be >= 1");
+    throw std::invalid_argument("fusion queue_size must be >= 1");
   }
-  config_.fusion.validate();
-  config_.projection.validate();
-  filter_ = std::make_unique<DynamicGridFilter>(config_.grid);
-  if (config_.backend == "opencv_dnn")
-  {
-    detector_ = std::make_unique<YoloDetector>(config_.yolo);
-  }
-  else if (config_.backend == "replay")
-  {
-    replay_ = std::make_unique<DetectionReplay>(config_.replay);
-    replay_->setScoreThreshold(config_.replay.score_threshold);
-  }
-  else
-  {
-    throw std::invalid_argument("backend must be \"opencv_dnn\" or \"replay\", got \"" + config_.backend + "\"");
-  }
+  grid_ = std::make_unique<GridStage>(config_.grid);
+  detector_ = std::make_unique<DetectorStage>(config_.detector);
+  projection_ = std::make_unique<ProjectionStage>(config_.projection);
+  fusion_ = std::make_unique<FusionStage>(config_.fusion);
 }
 
 Pipeline::~Pipeline() = default;
-
-std::vector<std::string> Pipeline::detectorWarnings() const
-{
-  return detector_ ? detector_->warnings() : std::vector<std::string>();
-}
 
 void Pipeline::warn(const std::string& what)
 {
@@ -185,14 +160,14 @@ void Pipeline::finish()
 
 bool Pipeline::tfReady(const Pending& p) const
 {
-  const std::string& fixed = config_.grid_node.fixed_frame;
+  const std::string& fixed = config_.grid.fixed_frame;
   switch (p.kind)
   {
     case Kind::kCloud:
       return tf_.canTransform(fixed, p.cloud->header.frame_id, p.stamp, nullptr);
     case Kind::kCameraInfo:
     {
-      const std::string& ground = config_.projection_node.ground_frame;
+      const std::string& ground = config_.projection.ground_frame;
       const std::string grid_frame = latest_grid_ ? latest_grid_->header.frame_id : fixed;
       return tf_.canTransform(p.info->header.frame_id, grid_frame, p.stamp, nullptr) &&
              (ground.empty() || tf_.canTransform(grid_frame, ground, p.stamp, nullptr));
@@ -245,36 +220,30 @@ void Pipeline::process(const Pending& pending)
 void Pipeline::processCloud(const sensor_msgs::PointCloud2& msg)
 {
   const auto start = std::chrono::steady_clock::now();
-  PointCloudView view;
-  const std::string field_error = pointCloudViewOf(msg, view);
-  if (!field_error.empty())
-  {
-    ++stats_.grid_drops;
-    warn("dynamic_grid: cloud of frame '" + msg.header.frame_id + "' unusable: " + field_error);
-    return;
-  }
-  Eigen::Isometry3d world_from_sensor;
+  DynamicGridCycle cycle;
   try
   {
-    world_from_sensor = scanPose(tf_, config_.grid_node.fixed_frame, msg.header.frame_id, msg.header.stamp);
+    cycle = grid_->update(msg, tf_);
+  }
+  catch (const UnusableMessage& e)
+  {
+    ++stats_.grid_drops;
+    warn("dynamic_grid: cloud of frame '" + msg.header.frame_id + "' unusable: " + e.what());
+    return;
   }
   catch (const tf2::TransformException& e)
   {
     ++stats_.grid_drops;
-    warn("dynamic_grid: scan dropped, no tf " + config_.grid_node.fixed_frame + " <- " + msg.header.frame_id +
-         ": " + e.what());
+    warn("dynamic_grid: scan dropped, no tf " + config_.grid.fixed_frame + " <- " + msg.header.frame_id + ": " +
+         e.what());
     return;
   }
-  const DynamicGridCycle cycle = filter_->update(view, world_from_sensor, msg.header.stamp.toSec());
   if (cycle.reset)
   {
     ++stats_.grid_resets;
     warn("dynamic_grid: grid reset: " + cycle.reset_reason);
   }
-  std_msgs::Header header;
-  header.stamp = msg.header.stamp;
-  header.frame_id = config_.grid_node.fixed_frame;
-  DynamicGrid::ConstPtr grid = dynamicGridToMsg(*filter_, header);
+  DynamicGrid::ConstPtr grid = grid_->gridMsg();
   const std::string grid_error = checkDynamicGrid(*grid);
   if (!grid_error.empty())
   {
@@ -299,15 +268,7 @@ void Pipeline::processImage(const sensor_msgs::Image::ConstPtr& msg)
   std::vector<Detection> detections;
   try
   {
-    if (replay_)
-    {
-      const std::int64_t frame_index = replay_->nextFrameIndex(msg->header.seq);
-      detections = replay_->detectionsOf(frame_index, msg->width, msg->height);
-    }
-    else
-    {
-      detections = detectInImage(*detector_, msg);
-    }
+    detections = detector_->detect(msg, detector_->frameIndex(*msg));
   }
   catch (const std::exception& e)
   {
@@ -338,7 +299,7 @@ void Pipeline::processCameraInfo(const sensor_msgs::CameraInfo& msg)
   ProjectedGrid::ConstPtr projected;
   try
   {
-    projected = projectGridIntoCamera(*latest_grid_, msg, tf_, config_.projection_node, config_.projection);
+    projected = projection_->project(*latest_grid_, msg, tf_);
   }
   catch (const ProjectionSkipped& e)
   {
@@ -365,7 +326,7 @@ void Pipeline::tryFuse(const ros::Time& stamp)
     const auto start = std::chrono::steady_clock::now();
     try
     {
-      FusedPair pair = fusePair(*detections->second, *projection->second, config_.fusion);
+      FusedPair pair = fusion_->fuse(*detections->second, *projection->second);
       ++stats_.objects;
       stats_.fusion_ms.push_back(elapsedMs(start));
       if (outputs_.objects)
@@ -382,7 +343,7 @@ void Pipeline::tryFuse(const ros::Time& stamp)
     projections_.erase(projection);
   }
   // A synchroniser queue: the oldest unmatched message goes when the queue is full.
-  const auto size = static_cast<std::size_t>(config_.fusion_queue_size);
+  const auto size = static_cast<std::size_t>(config_.fusion.queue_size);
   while (detections_.size() > size)
   {
     detections_.erase(detections_.begin());

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -21,66 +20,6 @@ float packRgb(std::uint8_t r, std::uint8_t g, std::uint8_t b)
   return packed;
 }
 }  // namespace
-
-DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& nh)
-{
-  DynamicGridConfig c;
-  readParam(nh, "width", c.width);
-  readParam(nh, "height", c.height);
-  readParam(nh, "resolution", c.resolution);
-  readParam(nh, "lookahead", c.lookahead);
-  readParam(nh, "max_time_gap", c.max_time_gap);
-  readParam(nh, "transition_period", c.transition_period);
-  readParam(nh, "eps_static_to_dynamic", c.eps_static_to_dynamic);
-  readParam(nh, "eps_static_to_unknown", c.eps_static_to_unknown);
-  readParam(nh, "eps_dynamic_to_static", c.eps_dynamic_to_static);
-  readParam(nh, "eps_dynamic_to_unknown", c.eps_dynamic_to_unknown);
-  readParam(nh, "eps_free_to_static", c.eps_free_to_static);
-  readParam(nh, "eps_free_to_dynamic", c.eps_free_to_dynamic);
-  readParam(nh, "eps_free_to_unknown", c.eps_free_to_unknown);
-  readParam(nh, "eps_unknown_to_static", c.eps_unknown_to_static);
-  readParam(nh, "eps_unknown_to_dynamic", c.eps_unknown_to_dynamic);
-  readParam(nh, "eps_unknown_to_free", c.eps_unknown_to_free);
-  readParam(nh, "particle_count", c.particle_count);
-  readParam(nh, "birth_fraction", c.birth_fraction);
-  readParam(nh, "birth_velocity_sigma", c.birth_velocity_sigma);
-  readParam(nh, "birth_motion_speed", c.birth_motion_speed);
-  readParam(nh, "birth_motion_fraction", c.birth_motion_fraction);
-  readParam(nh, "acceleration_sigma", c.acceleration_sigma);
-  readParam(nh, "max_speed", c.max_speed);
-  int seed = static_cast<int>(c.seed);
-  readParam(nh, "seed", seed);
-  if (seed < 0)
-  {
-    throw std::invalid_argument("parameter " + nh.describe("seed") + " must be >= 0, got " +
-                                std::to_string(seed));
-  }
-  c.seed = static_cast<std::uint32_t>(seed);
-  readParam(nh, "dynamic_threshold", c.dynamic_threshold);
-  readParam(nh, "min_dynamic_speed", c.min_dynamic_speed);
-  readParam(nh, "mahalanobis_threshold", c.mahalanobis_threshold);
-  readParam(nh, "occupied_threshold", c.occupied_threshold);
-  InverseSensorModelConfig& m = c.sensor_model;
-  readParam(nh, "sensor_height", m.sensor_height);
-  readParam(nh, "min_range", m.min_range);
-  readParam(nh, "max_range", m.max_range);
-  readParam(nh, "angular_resolution", m.angular_resolution);
-  readParam(nh, "range_resolution", m.range_resolution);
-  readParam(nh, "max_ground_slope", m.max_ground_slope);
-  readParam(nh, "ground_tolerance", m.ground_tolerance);
-  readParam(nh, "min_obstacle_height", m.min_obstacle_height);
-  readParam(nh, "max_obstacle_height", m.max_obstacle_height);
-  readParam(nh, "p_occupied", m.p_occupied);
-  readParam(nh, "p_free", m.p_free);
-  readParam(nh, "range_sigma", m.range_sigma);
-  c.validate();
-  return c;
-}
-
-DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh)
-{
-  return dynamicGridConfigFromParams(NodeHandleParamSource(nh));
-}
 
 std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudView& view)
 {

@@ -1,7 +1,9 @@
 #include "grid_vision_fusion/ros/params.h"
 
+#include <ros/param.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -212,6 +214,22 @@ std::string NodeHandleParamSource::describe(const std::string& name) const
   return nh_.resolveName(name);
 }
 
+std::vector<std::string> NodeHandleParamSource::names() const
+{
+  std::vector<std::string> all;
+  ros::param::getParamNames(all);
+  const std::string prefix = nh_.getNamespace() + "/";
+  std::vector<std::string> out;
+  for (const std::string& name : all)
+  {
+    if (name.rfind(prefix, 0) == 0)
+    {
+      out.push_back(name.substr(prefix.size()));
+    }
+  }
+  return out;
+}
+
 // --- YamlParamSource -------------------------------------------------------------------------
 
 YamlParamSource::YamlParamSource(std::string origin) : origin_(std::move(origin))
@@ -292,6 +310,33 @@ bool YamlParamSource::get(const std::string& name, XmlRpc::XmlRpcValue& value) c
   return true;
 }
 
+namespace
+{
+void collectNames(const XmlRpc::XmlRpcValue& node, const std::string& prefix, std::vector<std::string>& out)
+{
+  auto& struct_node = const_cast<XmlRpc::XmlRpcValue&>(node);
+  for (auto it = struct_node.begin(); it != struct_node.end(); ++it)
+  {
+    const std::string name = prefix + it->first;
+    if (it->second.getType() == XmlRpc::XmlRpcValue::TypeStruct && it->second.size() > 0)
+    {
+      collectNames(it->second, name + "/", out);
+    }
+    else
+    {
+      out.push_back(name);
+    }
+  }
+}
+}  // namespace
+
+std::vector<std::string> YamlParamSource::names() const
+{
+  std::vector<std::string> out;
+  collectNames(root_, "", out);
+  return out;
+}
+
 std::string YamlParamSource::describe(const std::string& name) const
 {
   const std::vector<std::string> parts = splitName(name);
@@ -357,6 +402,17 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, int& out)
   return false;
 }
 
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::uint32_t& out)
+{
+  int read = 0;
+  if (!paramValueAs(value, read) || read < 0)
+  {
+    return false;
+  }
+  out = static_cast<std::uint32_t>(read);
+  return true;
+}
+
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, double& out)
 {
   auto& v = const_cast<XmlRpc::XmlRpcValue&>(value);
@@ -403,25 +459,72 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, std::s
   return true;
 }
 
-// --- configs ---------------------------------------------------------------------------------
+XmlRpc::XmlRpcValue toParamValue(bool value) { return XmlRpc::XmlRpcValue(value); }
+XmlRpc::XmlRpcValue toParamValue(int value) { return XmlRpc::XmlRpcValue(value); }
+XmlRpc::XmlRpcValue toParamValue(std::uint32_t value) { return XmlRpc::XmlRpcValue(static_cast<int>(value)); }
+XmlRpc::XmlRpcValue toParamValue(double value) { return XmlRpc::XmlRpcValue(value); }
+XmlRpc::XmlRpcValue toParamValue(const std::string& value) { return XmlRpc::XmlRpcValue(value); }
 
-FusionConfig fusionConfigFromParams(const ParamSource& params)
+XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, std::string>& value)
 {
-  FusionConfig config;
-  readParam(params, "band_above", config.band_above);
-  readParam(params, "band_below", config.band_below);
-  readParam(params, "min_points", config.min_points);
-  std::string tie_rule = toString(config.tie_rule);
-  readParam(params, "tie_rule", tie_rule);
-  config.tie_rule = tieRuleFromString(tie_rule);
-  readParam(params, "exclusive_assignment", config.exclusive_assignment);
-  config.validate();
-  return config;
+  XmlRpc::XmlRpcValue out;
+  out.begin();  // an (empty) struct
+  for (const auto& [key, entry] : value)
+  {
+    out[key] = entry;
+  }
+  return out;
 }
 
-FusionConfig fusionConfigFromParams(const ros::NodeHandle& nh)
+// --- unknown parameters ----------------------------------------------------------------------
+
+std::string nearestName(const std::string& name, const std::vector<std::string>& candidates)
 {
-  return fusionConfigFromParams(NodeHandleParamSource(nh));
+  std::string best;
+  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> row;
+  for (const std::string& candidate : candidates)
+  {
+    // Levenshtein distance, one row at a time.
+    row.resize(candidate.size() + 1);
+    for (std::size_t j = 0; j <= candidate.size(); ++j)
+    {
+      row[j] = j;
+    }
+    for (std::size_t i = 1; i <= name.size(); ++i)
+    {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= candidate.size(); ++j)
+      {
+        const std::size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (name[i - 1] == candidate[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    if (row.back() < best_distance)
+    {
+      best_distance = row.back();
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+std::vector<std::string> ParamReader::unknownParams() const
+{
+  std::vector<std::string> warnings;
+  for (const std::string& name : source_.names())
+  {
+    const bool known = std::any_of(known_.begin(), known_.end(), [&](const std::string& k)
+                                   { return name == k || name.rfind(k + "/", 0) == 0; });
+    if (!known)
+    {
+      warnings.push_back("unknown parameter " + source_.describe(name) + " ignored (did you mean " +
+                         nearestName(name, known_) + "?)");
+    }
+  }
+  return warnings;
 }
 
 }  // namespace grid_vision_fusion

@@ -6,7 +6,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -116,32 +115,6 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
   msg->p_dynamic = std::move(cells.p_dynamic);
   msg->state = std::move(cells.state);
   return msg;
-}
-
-GridProjectionConfig gridProjectionConfigFromParams(const ParamSource& nh)
-{
-  GridProjectionConfig config;
-  readParam(nh, "occupied_threshold", config.occupied_threshold);
-  readParam(nh, "dynamic_ratio", config.dynamic_ratio);
-  readParam(nh, "min_depth", config.min_depth);
-  readParam(nh, "column_mode", config.column_mode);
-  readParam(nh, "column_height", config.column_height);
-  readParam(nh, "column_points", config.column_points);
-  readParam(nh, "predict_to_image_stamp", config.predict_to_image_stamp);
-  try
-  {
-    config.validate();
-  }
-  catch (const std::invalid_argument& e)
-  {
-    throw std::invalid_argument("parameter ~" + std::string(e.what()));
-  }
-  return config;
-}
-
-GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh)
-{
-  return gridProjectionConfigFromParams(NodeHandleParamSource(nh));
 }
 
 }  // namespace grid_vision_fusion

@@ -4,12 +4,9 @@
 
 #include <cmath>
 
-#include "grid_vision_fusion/ros/detector_conversions.h"
-#include "grid_vision_fusion/ros/grid_conversions.h"
-#include "grid_vision_fusion/ros/params.h"
 #include "grid_vision_fusion/offline/pipeline.h"
-#include "grid_vision_fusion/ros/projection_conversions.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/node_params.h"
+#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -135,41 +132,42 @@ TEST(YamlParamSource, FileErrorsNameTheFile)
 TEST(YamlParamSource, ThePackageConfigFilesGiveTheConfigsTheyDocument)
 {
   const YamlParamSource grid = YamlParamSource::fromFile(kConfigDir + "/dynamic_grid.yaml");
-  const DynamicGridConfig g = dynamicGridConfigFromParams(grid);
+  const DynamicGridConfig g = DynamicGridParams::fromParams(grid).filter;
   EXPECT_EQ(g.particle_count, 131072);
   EXPECT_EQ(g.seed, 42U);
   EXPECT_DOUBLE_EQ(g.resolution, 0.2);
-  const DynamicGridNodeOptions gn = dynamicGridNodeOptionsFromParams(grid);
+  const DynamicGridParams gn = DynamicGridParams::fromParams(grid);
   EXPECT_EQ(gn.fixed_frame, "world");
 
   YamlParamSource detector = YamlParamSource::fromFile(kConfigDir + "/yolo_detector.yaml");
+  detector.set("backend", XmlRpc::XmlRpcValue(std::string("replay")));
   detector.set("replay/directory", XmlRpc::XmlRpcValue(std::string("/tmp")));
-  const DetectionReplayConfig r = detectionReplayConfigFromParams(detector);
+  const DetectionReplayConfig r = DetectorParams::fromParams(detector).replay;
   EXPECT_EQ(r.class_map.at("Person_sitting"), "pedestrian");
   EXPECT_EQ(r.file_pattern, "%06d.txt");
 
   const YamlParamSource projection = YamlParamSource::fromFile(kConfigDir + "/grid_projection.yaml");
-  EXPECT_DOUBLE_EQ(gridProjectionConfigFromParams(projection).occupied_threshold, 0.4);
-  const GridProjectionNodeOptions pn = gridProjectionNodeOptionsFromParams(projection);
+  EXPECT_DOUBLE_EQ(GridProjectionParams::fromParams(projection).projection.occupied_threshold, 0.4);
+  const GridProjectionParams pn = GridProjectionParams::fromParams(projection);
   EXPECT_EQ(pn.ground_frame, "velo_link");
   EXPECT_DOUBLE_EQ(pn.ground_height, -1.73);
 
   const YamlParamSource fusion = YamlParamSource::fromFile(kConfigDir + "/fusion.yaml");
-  EXPECT_EQ(fusionConfigFromParams(fusion).min_points, 1);
+  EXPECT_EQ(FusionParams::fromParams(fusion).fusion.min_points, 1);
 }
 
 TEST(YamlParamSource, ConfigFunctionsRefuseBadValuesNamingTheParameter)
 {
   const YamlParamSource grid = YamlParamSource::fromString("seed: -1\n", "grid.yaml");
-  EXPECT_NE(invalidArgument([&] { dynamicGridConfigFromParams(grid); }).find("grid.yaml:seed"), std::string::npos);
+  EXPECT_NE(invalidArgument([&] { DynamicGridParams::fromParams(grid); }).find("grid.yaml:seed"), std::string::npos);
   const YamlParamSource wrong = YamlParamSource::fromString("particle_count: many\n", "grid.yaml");
-  EXPECT_NE(invalidArgument([&] { dynamicGridConfigFromParams(wrong); }).find("grid.yaml:particle_count"),
+  EXPECT_NE(invalidArgument([&] { DynamicGridParams::fromParams(wrong); }).find("grid.yaml:particle_count"),
             std::string::npos);
   const YamlParamSource frame = YamlParamSource::fromString("fixed_frame: ''\n", "grid.yaml");
-  EXPECT_NE(invalidArgument([&] { dynamicGridNodeOptionsFromParams(frame); }).find("grid.yaml:fixed_frame"),
+  EXPECT_NE(invalidArgument([&] { DynamicGridParams::fromParams(frame); }).find("grid.yaml:fixed_frame"),
             std::string::npos);
   const YamlParamSource age = YamlParamSource::fromString("max_grid_age: 0\n", "proj.yaml");
-  EXPECT_NE(invalidArgument([&] { gridProjectionNodeOptionsFromParams(age); }).find("proj.yaml:max_grid_age"),
+  EXPECT_NE(invalidArgument([&] { GridProjectionParams::fromParams(age); }).find("proj.yaml:max_grid_age"),
             std::string::npos);
   const YamlParamSource det = YamlParamSource::fromString("backend: magic\n", "det.yaml");
   const YamlParamSource empty("empty.yaml");

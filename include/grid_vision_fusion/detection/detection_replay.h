@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/types.h"
+#include "grid_vision_fusion/detection/detector.h"
 #include "grid_vision_fusion/detection/kitti_labels.h"
 
 namespace grid_vision_fusion
@@ -46,7 +46,7 @@ struct DetectionReplayConfig
   /// Score of labels without a 16th column (ground truth). Range [0, 1].
   double default_score = 1.0;
   /// Labels with a score below this are dropped. Range [0, 1].
-  double score_threshold = 0.0;
+  double score_threshold = kDefaultScoreThreshold;
   /// When true a missing file means "no object in this frame"; when false it is an error.
   bool missing_file_is_empty = false;
 
@@ -55,7 +55,7 @@ struct DetectionReplayConfig
 };
 
 /// Reads the detections of frame after frame.
-class DetectionReplay
+class DetectionReplay : public Detector
 {
 public:
   /// @throws std::invalid_argument for a bad config or a directory that does not exist.
@@ -78,6 +78,18 @@ public:
 
   /// Changes the score threshold. @throws std::invalid_argument outside [0, 1].
   void setScoreThreshold(double score_threshold);
+
+  // Detector: the labels of the image's frame index, no pixels needed.
+  std::int64_t frameIndex(std::uint32_t header_seq) override { return nextFrameIndex(header_seq); }
+  bool needsPixels() const override { return false; }
+  std::vector<Detection> detect(const DetectorImage& image) override
+  {
+    return detectionsOf(image.frame_index, image.width, image.height);
+  }
+  /// The score threshold; there is no NMS (`nms_threshold` is ignored).
+  void setThresholds(double score_threshold, double /*nms_threshold*/) override { setScoreThreshold(score_threshold); }
+  /// "replay of <directory>/<file_pattern>, frame index from the <counter|header seq>".
+  std::string description() const override;
 
   const DetectionReplayConfig& config() const { return config_; }
 

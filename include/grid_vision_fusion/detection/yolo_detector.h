@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/types.h"
+#include "grid_vision_fusion/detection/detector.h"
 
 namespace grid_vision_fusion
 {
@@ -22,14 +22,6 @@ class YoloModelError : public std::runtime_error
 {
 public:
   using std::runtime_error::runtime_error;
-};
-
-/// Channel layout of an image handed to YoloDetector::detect().
-enum class PixelFormat
-{
-  kBgr8,   ///< CV_8UC3, blue first
-  kRgb8,   ///< CV_8UC3, red first
-  kMono8,  ///< CV_8UC1, replicated to three channels
 };
 
 /// How an image is fitted to the network input.
@@ -56,6 +48,11 @@ enum class YoloOutputLayout
   kPixels,
 };
 
+/// Parses "opencv_region" or "pixels". @throws std::invalid_argument otherwise.
+YoloOutputLayout yoloOutputLayoutFromString(const std::string& name);
+/// The name parsed by yoloOutputLayoutFromString().
+std::string toString(YoloOutputLayout layout);
+
 /// Parameters of the detector.
 struct YoloDetectorConfig
 {
@@ -77,7 +74,7 @@ struct YoloDetectorConfig
   /// Row layout of ONNX outputs (Darknet models always give kOpenCvRegion).
   YoloOutputLayout onnx_layout = YoloOutputLayout::kPixels;
   /// Detections with a score (objectness × class probability) below this are dropped. [0, 1].
-  double score_threshold = 0.5;
+  double score_threshold = kDefaultScoreThreshold;
   /// IoU above which the lower-scored of two boxes of the same class is suppressed. [0, 1].
   double nms_threshold = 0.45;
   /// OpenCV DNN backend: "opencv" (default), "cuda" or "inference_engine".
@@ -177,7 +174,7 @@ std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& ca
                                             double nms_threshold);
 
 /// A YOLO network ready to run. Not thread-safe: one detect() at a time.
-class YoloDetector
+class YoloDetector : public Detector
 {
 public:
   /// Validates `config`, checks and loads the model files, selects backend and target (falling
@@ -193,8 +190,13 @@ public:
   /// @throws std::invalid_argument for an empty image or a type that does not match `format`.
   std::vector<Detection> detect(const cv::Mat& image, PixelFormat format);
 
+  // Detector: detect() of the image's pixels.
+  bool needsPixels() const override { return true; }
+  std::vector<Detection> detect(const DetectorImage& image) override { return detect(image.pixels, image.format); }
   /// Changes the score and NMS thresholds. @throws std::invalid_argument outside [0, 1].
-  void setThresholds(double score_threshold, double nms_threshold);
+  void setThresholds(double score_threshold, double nms_threshold) override;
+  /// "<model> (<n> classes), input WxH <resize mode>, <backend/target>".
+  std::string description() const override;
 
   /// The network input blob (1×3×H×W, float32, [0, 1]) for `image`, as detect() builds it.
   cv::Mat makeInputBlob(const cv::Mat& image, PixelFormat format, InputTransform& transform) const;
@@ -205,7 +207,7 @@ public:
   /// Floating-point operations of one forward pass (cv::dnn::Net::getFLOPS).
   std::int64_t flops();
   /// Backend/target fallbacks that happened while loading (empty when none).
-  const std::vector<std::string>& warnings() const { return warnings_; }
+  std::vector<std::string> warnings() const override { return warnings_; }
   /// "backend/target" actually used, e.g. "opencv/cpu".
   std::string backendDescription() const;
 

@@ -1,6 +1,6 @@
 // The four stages (dynamic grid, detector, grid projection, fusion) off line: fed with the
-// messages of a bag in time order, without roscore, through the same core code and the same
-// ROS-layer glue as the nodelets, deterministically. run_pipeline is a thin tool around it.
+// messages of a bag in time order, without roscore, through the very stage classes the nodelets
+// use, deterministically. The Pipeline only schedules; run_pipeline is a thin tool around it.
 #pragma once
 
 #include <rosbag/bag.h>
@@ -22,41 +22,34 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/detection/detection_replay.h"
-#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
-#include "grid_vision_fusion/fusion/fusion.h"
-#include "grid_vision_fusion/projection/grid_projection.h"
-#include "grid_vision_fusion/detection/yolo_detector.h"
-#include "grid_vision_fusion/ros/params.h"
-#include "grid_vision_fusion/ros/stages.h"
+#include "grid_vision_fusion/ros/detector_stage.h"
+#include "grid_vision_fusion/ros/fusion_stage.h"
+#include "grid_vision_fusion/ros/grid_stage.h"
+#include "grid_vision_fusion/ros/node_params.h"
+#include "grid_vision_fusion/ros/projection_stage.h"
 
 namespace grid_vision_fusion
 {
-/// Everything the four stages are configured with: what the four nodelets read from their
-/// parameters (config/dynamic_grid.yaml, yolo_detector.yaml, grid_projection.yaml, fusion.yaml).
+/// Everything the four stages are configured with: the parameters of the four nodelets
+/// (config/dynamic_grid.yaml, yolo_detector.yaml, grid_projection.yaml, fusion.yaml).
 struct PipelineConfig
 {
-  DynamicGridConfig grid;
-  DynamicGridNodeOptions grid_node;
-  std::string backend = "opencv_dnn";  ///< detector backend: "opencv_dnn" or "replay"
-  YoloDetectorConfig yolo;             ///< used with opencv_dnn
-  DetectionReplayConfig replay;        ///< used with replay
-  GridProjectionConfig projection;
-  GridProjectionNodeOptions projection_node;
-  FusionConfig fusion;
+  DynamicGridParams grid;
+  DetectorParams detector;
+  GridProjectionParams projection;
+  FusionParams fusion;  ///< its queue_size is the queue of detections / projected grids waiting for a partner
   /// How long (bag time) a sensor message may wait for the tf it needs before it is handled
   /// anyway (and dropped by its stage if tf still cannot answer) [s], >= 0. The nodelets wait
-  /// for tf too (dynamic_grid through a tf message filter).
+  /// for tf too (through tf message filters).
   double max_tf_wait = 0.5;
-  /// Detection and projected-grid messages waiting for their partner (as the fusion nodelet's
-  /// synchroniser queue), >= 1.
-  int fusion_queue_size = 10;
 };
 
-/// The PipelineConfig of the four parameter sources, read by the very functions the nodelets
-/// use. @throws std::invalid_argument naming the parameter at fault.
+/// The PipelineConfig of the four parameter sources, read as the nodelets read them.
+/// `unknown` (when given) receives a warning per parameter name no node knows.
+/// @throws std::invalid_argument naming the parameter at fault.
 PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSource& detector,
-                                        const ParamSource& projection, const ParamSource& fusion);
+                                        const ParamSource& projection, const ParamSource& fusion,
+                                        std::vector<std::string>* unknown = nullptr);
 
 /// Per-stage wall times [ms] of every processed message and counters.
 struct PipelineStats
@@ -110,7 +103,7 @@ public:
   const PipelineStats& stats() const { return stats_; }
   const PipelineConfig& config() const { return config_; }
   /// Warnings of the detector while loading (backend fallbacks).
-  std::vector<std::string> detectorWarnings() const;
+  std::vector<std::string> detectorWarnings() const { return detector_->detector().warnings(); }
 
 private:
   enum class Kind
@@ -143,9 +136,10 @@ private:
   PipelineOutputs outputs_;
   PipelineStats stats_;
   tf2::BufferCore tf_;
-  std::unique_ptr<DynamicGridFilter> filter_;
-  std::unique_ptr<YoloDetector> detector_;
-  std::unique_ptr<DetectionReplay> replay_;
+  std::unique_ptr<GridStage> grid_;
+  std::unique_ptr<DetectorStage> detector_;
+  std::unique_ptr<ProjectionStage> projection_;
+  std::unique_ptr<FusionStage> fusion_;
   DynamicGrid::ConstPtr latest_grid_;
   std::deque<Pending> queue_;  ///< sorted by (stamp, kind, order)
   std::uint64_t arrivals_ = 0;

@@ -1,9 +1,8 @@
-// Messages <-> dynamic grid core: parameters, PointCloud2 views, DynamicGrid, OccupancyGrid and
-// the grid/cells point cloud.
+// Messages <-> dynamic grid core: PointCloud2 views, DynamicGrid, OccupancyGrid and the
+// grid/cells point cloud.
 #pragma once
 
 #include <nav_msgs/OccupancyGrid.h>
-#include <ros/node_handle.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
 
@@ -11,16 +10,9 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"
-#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
-/// DynamicGridConfig from the private parameters (names as the Config fields, flat; the sensor
-/// model fields without prefix, see config/dynamic_grid.yaml). Unset keys keep the defaults.
-/// @throws std::invalid_argument on a wrong type or a value that validate() rejects.
-DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& params);
-DynamicGridConfig dynamicGridConfigFromParams(const ros::NodeHandle& nh);
-
 /// Points `view` at the float32 x, y, z fields of `cloud` (no copy; the view is valid while
 /// `cloud` lives). Returns an empty string on success, otherwise what is wrong (missing field,
 /// field not float32, big-endian data, point_step or row_step inconsistent with the data).

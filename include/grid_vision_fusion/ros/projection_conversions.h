@@ -1,8 +1,7 @@
 // Conversions for the grid projection: DynamicGrid → core grid view (no copy), CameraInfo →
-// pinhole camera, projected cells → ProjectedGrid (moved, no copy), parameters → config.
+// pinhole camera, projected cells → ProjectedGrid (moved, no copy).
 #pragma once
 
-#include <ros/node_handle.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <std_msgs/Header.h>
 
@@ -11,7 +10,6 @@
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/projection/grid_projection.h"
-#include "grid_vision_fusion/ros/params.h"
 
 namespace grid_vision_fusion
 {
@@ -34,11 +32,5 @@ PinholeCamera pinholeFromCameraInfo(const sensor_msgs::CameraInfo& msg);
 /// `cells` are moved into the message (left empty).
 ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::Header& image_header,
                                       const std_msgs::Header& grid_header, const PinholeCamera& camera);
-
-/// GridProjectionConfig from the private parameters occupied_threshold, dynamic_ratio,
-/// min_depth, column_mode, column_height, column_points, predict_to_image_stamp.
-/// @throws std::invalid_argument on a wrong type or a value that validate() rejects.
-GridProjectionConfig gridProjectionConfigFromParams(const ParamSource& params);
-GridProjectionConfig gridProjectionConfigFromParams(const ros::NodeHandle& nh);
 
 }  // namespace grid_vision_fusion

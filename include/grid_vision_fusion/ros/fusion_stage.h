@@ -1,0 +1,45 @@
+// The fusion stage: a Detection2DArray and the ProjectedGrid of the same image in, the fused
+// objects (DetectedObjectArray) out. Shared by the fusion nodelet and the offline Pipeline.
+#pragma once
+
+#include <vector>
+
+#include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/Detection2DArray.h"
+#include "grid_vision_fusion/ProjectedGrid.h"
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/ros/node_params.h"
+
+namespace grid_vision_fusion
+{
+/// A fused detection / projected-grid pair.
+struct FusedPair
+{
+  std::vector<Detection> detections;  ///< the boxes of the Detection2DArray
+  FusionResult result;                ///< the fusion core's result
+  DetectedObjectArray::Ptr objects;   ///< the message (stamp of the image, grid frame)
+};
+
+/// The fusion with its parameters. Not thread-safe.
+class FusionStage
+{
+public:
+  /// @throws std::invalid_argument when `params` is invalid.
+  explicit FusionStage(const FusionParams& params);
+
+  /// Checks and fuses a pair: checkProjectedGrid(), checkFusionInputs(), fuse(), objectsToMsg().
+  /// @throws std::invalid_argument naming what is wrong with the pair.
+  FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid) const;
+
+  /// Replaces the fusion configuration (dynamic_reconfigure). @throws std::invalid_argument
+  /// as FusionConfig::validate(), leaving the configuration unchanged.
+  void setConfig(const FusionConfig& config);
+
+  const FusionConfig& config() const { return params_.fusion; }
+  const FusionParams& params() const { return params_; }
+
+private:
+  FusionParams params_;
+};
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,223 @@
+// The parameter tables of the four nodes: for each, every parameter name of its private
+// namespace (and of its config/*.yaml file) with the field it fills. A default is written once,
+// in the field's struct: the YAML files and the dynamic_reconfigure .cfg files are checked
+// against these tables by test/ros/test_node_params.cpp.
+//
+// A table is visited (visitParams) by a ParamReader to read it, by ParamValues to list its
+// values; fromParams() reads, validates and reports the unknown names of a source.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/detection/detection_replay.h"
+#include "grid_vision_fusion/detection/yolo_detector.h"
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/grid/dynamic_grid_filter.h"
+#include "grid_vision_fusion/projection/grid_projection.h"
+#include "grid_vision_fusion/ros/params.h"
+
+namespace grid_vision_fusion
+{
+// --- enumerations: read from and written as their names ----------------------------------------
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, TieRule& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, YoloOutputLayout& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, FrameIndexSource& out);
+XmlRpc::XmlRpcValue toParamValue(TieRule value);
+XmlRpc::XmlRpcValue toParamValue(ResizeMode value);
+XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value);
+XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value);
+
+// --- dynamic_grid ------------------------------------------------------------------------------
+
+/// The dynamic_grid node's parameters (config/dynamic_grid.yaml): its own options and the
+/// filter's DynamicGridConfig (sensor model keys flat, without prefix).
+struct DynamicGridParams
+{
+  std::string fixed_frame = "world";  ///< frame of the grid and of the filter's poses, non-empty
+  bool lazy = true;                   ///< subscribe only while someone listens
+  int queue_size = 5;                 ///< clouds waiting for their tf (>= 1)
+  double expected_rate = 10.0;        ///< scan rate for the diagnostics [Hz] (> 0)
+  DynamicGridConfig filter;
+
+  /// Reads, validates; `unknown` (when given) receives a warning per unknown parameter name.
+  /// @throws std::invalid_argument naming the parameter at fault.
+  static DynamicGridParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+};
+
+template <typename Visitor>
+void visitParams(DynamicGridParams& p, Visitor& v)
+{
+  v("fixed_frame", p.fixed_frame);
+  v("lazy", p.lazy);
+  v("queue_size", p.queue_size);
+  v("expected_rate", p.expected_rate);
+  v.foreign("diagnostic_period");
+  auto& c = p.filter;
+  v("width", c.width);
+  v("height", c.height);
+  v("resolution", c.resolution);
+  v("lookahead", c.lookahead);
+  v("max_time_gap", c.max_time_gap);
+  v("transition_period", c.transition_period);
+  v("eps_static_to_dynamic", c.eps_static_to_dynamic);
+  v("eps_static_to_unknown", c.eps_static_to_unknown);
+  v("eps_dynamic_to_static", c.eps_dynamic_to_static);
+  v("eps_dynamic_to_unknown", c.eps_dynamic_to_unknown);
+  v("eps_free_to_static", c.eps_free_to_static);
+  v("eps_free_to_dynamic", c.eps_free_to_dynamic);
+  v("eps_free_to_unknown", c.eps_free_to_unknown);
+  v("eps_unknown_to_static", c.eps_unknown_to_static);
+  v("eps_unknown_to_dynamic", c.eps_unknown_to_dynamic);
+  v("eps_unknown_to_free", c.eps_unknown_to_free);
+  v("particle_count", c.particle_count);
+  v("birth_fraction", c.birth_fraction);
+  v("birth_velocity_sigma", c.birth_velocity_sigma);
+  v("birth_motion_speed", c.birth_motion_speed);
+  v("birth_motion_fraction", c.birth_motion_fraction);
+  v("acceleration_sigma", c.acceleration_sigma);
+  v("max_speed", c.max_speed);
+  v("seed", c.seed);
+  v("dynamic_threshold", c.dynamic_threshold);
+  v("min_dynamic_speed", c.min_dynamic_speed);
+  v("mahalanobis_threshold", c.mahalanobis_threshold);
+  v("occupied_threshold", c.occupied_threshold);
+  auto& m = c.sensor_model;
+  v("sensor_height", m.sensor_height);
+  v("min_range", m.min_range);
+  v("max_range", m.max_range);
+  v("angular_resolution", m.angular_resolution);
+  v("range_resolution", m.range_resolution);
+  v("max_ground_slope", m.max_ground_slope);
+  v("ground_tolerance", m.ground_tolerance);
+  v("min_obstacle_height", m.min_obstacle_height);
+  v("max_obstacle_height", m.max_obstacle_height);
+  v("p_occupied", m.p_occupied);
+  v("p_free", m.p_free);
+  v("range_sigma", m.range_sigma);
+}
+
+// --- yolo_detector -----------------------------------------------------------------------------
+
+/// The yolo_detector node's parameters (config/yolo_detector.yaml): the backend and the
+/// configuration of each. score_threshold is one parameter for both backends.
+struct DetectorParams
+{
+  std::string backend = "opencv_dnn";  ///< "opencv_dnn" (a YOLO network) or "replay" (label files)
+  bool lazy = true;
+  YoloDetectorConfig yolo;        ///< used with opencv_dnn (keys without prefix)
+  DetectionReplayConfig replay;   ///< used with replay (keys replay/...)
+
+  /// Reads and validates the configuration of the chosen backend; `unknown` as above.
+  /// @throws std::invalid_argument naming the parameter at fault.
+  static DetectorParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+};
+
+template <typename Visitor>
+void visitParams(DetectorParams& p, Visitor& v)
+{
+  v("backend", p.backend);
+  v("lazy", p.lazy);
+  v.foreign("image_transport");
+  v.foreign("diagnostic_period");
+  v("score_threshold", p.yolo.score_threshold);  // both backends: copied to replay by fromParams()
+  v("nms_threshold", p.yolo.nms_threshold);
+  v("model", p.yolo.model_path);
+  v("weights", p.yolo.weights_path);
+  v("class_names", p.yolo.class_names_path);
+  v("input_width", p.yolo.input_width);
+  v("input_height", p.yolo.input_height);
+  v("resize_mode", p.yolo.resize_mode);
+  v("network_rgb", p.yolo.network_rgb);
+  v("onnx_layout", p.yolo.onnx_layout);
+  v("dnn_backend", p.yolo.backend);
+  v("dnn_target", p.yolo.target);
+  v("class_map", p.yolo.class_map);
+  v("replay/directory", p.replay.directory);
+  v("replay/file_pattern", p.replay.file_pattern);
+  v("replay/frame_index", p.replay.index_source);
+  v("replay/first_index", p.replay.first_index);
+  v("replay/class_map", p.replay.class_map);
+  v("replay/default_score", p.replay.default_score);
+  v("replay/missing_file_is_empty", p.replay.missing_file_is_empty);
+}
+
+// --- grid_projection ---------------------------------------------------------------------------
+
+/// The grid_projection node's parameters (config/grid_projection.yaml).
+struct GridProjectionParams
+{
+  /// Frame whose origin the ground plane is ground_height below (empty: ground_height is the z
+  /// of the ground in the grid frame itself).
+  std::string ground_frame = "velo_link";
+  double ground_height = -1.73;  ///< [m], finite
+  double max_grid_age = 0.5;     ///< largest |t_image − t_grid| projected [s] (> 0)
+  int image_cache_size = 5;      ///< images kept for the overlay (>= 1)
+  int queue_size = 5;            ///< camera_infos waiting for their tf (>= 1)
+  bool lazy = true;
+  GridProjectionConfig projection;
+
+  /// @throws std::invalid_argument naming the parameter at fault.
+  static GridProjectionParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+};
+
+template <typename Visitor>
+void visitParams(GridProjectionParams& p, Visitor& v)
+{
+  v("ground_frame", p.ground_frame);
+  v("ground_height", p.ground_height);
+  v("max_grid_age", p.max_grid_age);
+  v("image_cache_size", p.image_cache_size);
+  v("queue_size", p.queue_size);
+  v("lazy", p.lazy);
+  v.foreign("image_transport");
+  v("occupied_threshold", p.projection.occupied_threshold);
+  v("dynamic_ratio", p.projection.dynamic_ratio);
+  v("min_depth", p.projection.min_depth);
+  v("column_mode", p.projection.column_mode);
+  v("column_height", p.projection.column_height);
+  v("column_points", p.projection.column_points);
+  v("predict_to_image_stamp", p.projection.predict_to_image_stamp);
+}
+
+// --- fusion ------------------------------------------------------------------------------------
+
+/// The fusion node's parameters (config/fusion.yaml).
+struct FusionParams
+{
+  bool lazy = true;
+  bool approximate_sync = false;  ///< approximate instead of exact stamp matching
+  int queue_size = 10;            ///< synchroniser queue per input (>= 1)
+  int image_cache_size = 10;      ///< images kept for the overlay (>= 1)
+  FusionConfig fusion;
+
+  /// @throws std::invalid_argument naming the parameter at fault.
+  static FusionParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+};
+
+template <typename Visitor>
+void visitParams(FusionParams& p, Visitor& v)
+{
+  v("lazy", p.lazy);
+  v("approximate_sync", p.approximate_sync);
+  v("queue_size", p.queue_size);
+  v("image_cache_size", p.image_cache_size);
+  v.foreign("image_transport");
+  v("band_above", p.fusion.band_above);
+  v("band_below", p.fusion.band_below);
+  v("min_points", p.fusion.min_points);
+  v("tie_rule", p.fusion.tie_rule);
+  v("exclusive_assignment", p.fusion.exclusive_assignment);
+}
+
+/// The values of the table `params` by parameter name (the defaults for a default-constructed one).
+template <typename Params>
+std::map<std::string, XmlRpc::XmlRpcValue> paramValuesOf(Params params)
+{
+  ParamValues values;
+  visitParams(params, values);
+  return values.values;
+}
+
+}  // namespace grid_vision_fusion

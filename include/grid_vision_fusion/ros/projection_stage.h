@@ -1,0 +1,54 @@
+// The grid projection stage: a DynamicGrid and a camera's CameraInfo in, the occupied cells
+// projected into that camera's image out (ProjectedGrid stamped like the image). Shared by the
+// grid_projection nodelet and the offline Pipeline.
+#pragma once
+
+#include <sensor_msgs/CameraInfo.h>
+#include <tf2/buffer_core.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/DynamicGrid.h"
+#include "grid_vision_fusion/ProjectedGrid.h"
+#include "grid_vision_fusion/ros/node_params.h"
+
+namespace grid_vision_fusion
+{
+/// Why a camera_info produced no projected grid.
+class ProjectionSkipped : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The projection with its parameters. Stateless between calls; project() may run concurrently.
+class ProjectionStage
+{
+public:
+  /// @throws std::invalid_argument when `params` is invalid.
+  explicit ProjectionStage(const GridProjectionParams& params);
+
+  /// The projection of `grid` into the camera of `info`: camera from CameraInfo, grid age check
+  /// (max_grid_age), camera ← grid transform and ground height from tf at the image stamp,
+  /// projectGrid(), ProjectedGrid stamped like the image. `grid` must have passed
+  /// checkDynamicGrid(). `invalid_cells` (when given) receives the count of cells skipped for
+  /// NaN/Inf values.
+  /// @throws ProjectionSkipped with the reason (unusable camera_info, grid too old, no tf).
+  ProjectedGrid::Ptr project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
+                             const tf2::BufferCore& tf, std::size_t* invalid_cells = nullptr) const;
+
+  /// The frames tf must know, besides the camera's, to project a grid of `grid_frame`.
+  std::vector<std::string> tfFrames(const std::string& grid_frame) const;
+
+  const GridProjectionParams& params() const { return params_; }
+
+private:
+  /// z of the ground plane in `grid_frame` at `stamp` (see GridProjectionParams::ground_frame).
+  double groundZ(const tf2::BufferCore& tf, const std::string& grid_frame, const ros::Time& stamp) const;
+
+  GridProjectionParams params_;
+};
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,40 @@
+#include "grid_vision_fusion/ros/fusion_stage.h"
+
+#include <stdexcept>
+
+#include "grid_vision_fusion/ros/fusion_conversions.h"
+
+namespace grid_vision_fusion
+{
+FusionStage::FusionStage(const FusionParams& params) : params_(params)
+{
+  params_.fusion.validate();
+}
+
+void FusionStage::setConfig(const FusionConfig& config)
+{
+  config.validate();
+  params_.fusion = config;
+}
+
+FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedGrid& grid) const
+{
+  const std::string grid_error = checkProjectedGrid(grid);
+  if (!grid_error.empty())
+  {
+    throw std::invalid_argument("projected grid: " + grid_error);
+  }
+  FusedPair pair;
+  pair.detections = detectionsFromMsg(detections);
+  const std::string input_error = checkFusionInputs(pair.detections, detections.image_width,
+                                                    detections.image_height, grid.image_width, grid.image_height);
+  if (!input_error.empty())
+  {
+    throw std::invalid_argument(input_error);
+  }
+  pair.result = grid_vision_fusion::fuse(pair.detections, viewOf(grid), params_.fusion);
+  pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
+  return pair;
+}
+
+}  // namespace grid_vision_fusion

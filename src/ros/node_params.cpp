@@ -1,0 +1,123 @@
+#include "grid_vision_fusion/ros/node_params.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+/// Reads an enumeration from its name with `parse`, which throws std::invalid_argument listing
+/// the valid names.
+template <typename Enum, typename Parse>
+bool enumFromParam(const XmlRpc::XmlRpcValue& value, Enum& out, Parse parse)
+{
+  std::string name;
+  if (!paramValueAs(value, name))
+  {
+    return false;
+  }
+  out = parse(name);
+  return true;
+}
+
+/// @throws std::invalid_argument "parameter <name> <what>" unless `condition`.
+void require(bool condition, const ParamSource& source, const std::string& name, const std::string& what)
+{
+  if (!condition)
+  {
+    throw std::invalid_argument("parameter " + source.describe(name) + " " + what);
+  }
+}
+
+/// Visits `params` with a reader of `source`; hands the unknown names to `unknown`.
+template <typename Params>
+void readTable(Params& params, const ParamSource& source, std::vector<std::string>* unknown)
+{
+  ParamReader reader(source);
+  visitParams(params, reader);
+  if (unknown)
+  {
+    *unknown = reader.unknownParams();
+  }
+}
+}  // namespace
+
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, TieRule& out)
+{
+  return enumFromParam(value, out, tieRuleFromString);
+}
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out)
+{
+  return enumFromParam(value, out, resizeModeFromString);
+}
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, YoloOutputLayout& out)
+{
+  return enumFromParam(value, out, yoloOutputLayoutFromString);
+}
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, FrameIndexSource& out)
+{
+  return enumFromParam(value, out, frameIndexSourceFromString);
+}
+XmlRpc::XmlRpcValue toParamValue(TieRule value) { return toParamValue(toString(value)); }
+XmlRpc::XmlRpcValue toParamValue(ResizeMode value) { return toParamValue(toString(value)); }
+XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value) { return toParamValue(toString(value)); }
+XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value) { return toParamValue(toString(value)); }
+
+DynamicGridParams DynamicGridParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
+{
+  DynamicGridParams p;
+  readTable(p, source, unknown);
+  require(!p.fixed_frame.empty(), source, "fixed_frame", "must not be empty");
+  require(p.queue_size >= 1, source, "queue_size", "must be >= 1, got " + std::to_string(p.queue_size));
+  require(p.expected_rate > 0.0 && std::isfinite(p.expected_rate), source, "expected_rate", "must be > 0 [Hz]");
+  p.filter.validate();
+  return p;
+}
+
+DetectorParams DetectorParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
+{
+  DetectorParams p;
+  readTable(p, source, unknown);
+  p.replay.score_threshold = p.yolo.score_threshold;
+  if (p.backend == "opencv_dnn")
+  {
+    p.yolo.validate();
+  }
+  else if (p.backend == "replay")
+  {
+    p.replay.validate();
+  }
+  else
+  {
+    require(false, source, "backend", "must be \"opencv_dnn\" or \"replay\", got \"" + p.backend + "\"");
+  }
+  return p;
+}
+
+GridProjectionParams GridProjectionParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
+{
+  GridProjectionParams p;
+  readTable(p, source, unknown);
+  require(std::isfinite(p.ground_height), source, "ground_height", "must be finite");
+  require(std::isfinite(p.max_grid_age) && p.max_grid_age > 0.0, source, "max_grid_age",
+          "must be finite and > 0 s, got " + std::to_string(p.max_grid_age));
+  require(p.image_cache_size >= 1, source, "image_cache_size",
+          "must be >= 1, got " + std::to_string(p.image_cache_size));
+  require(p.queue_size >= 1, source, "queue_size", "must be >= 1, got " + std::to_string(p.queue_size));
+  p.projection.validate();
+  return p;
+}
+
+FusionParams FusionParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
+{
+  FusionParams p;
+  readTable(p, source, unknown);
+  require(p.queue_size >= 1, source, "queue_size", "must be >= 1, got " + std::to_string(p.queue_size));
+  require(p.image_cache_size >= 1, source, "image_cache_size",
+          "must be >= 1, got " + std::to_string(p.image_cache_size));
+  p.fusion.validate();
+  return p;
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,96 @@
+#include "grid_vision_fusion/ros/projection_stage.h"
+
+#include <tf2/exceptions.h>
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <cmath>
+#include <memory>
+
+#include "grid_vision_fusion/ros/projection_conversions.h"
+
+namespace grid_vision_fusion
+{
+ProjectionStage::ProjectionStage(const GridProjectionParams& params) : params_(params)
+{
+  params_.projection.validate();
+}
+
+std::vector<std::string> ProjectionStage::tfFrames(const std::string& grid_frame) const
+{
+  std::vector<std::string> frames{grid_frame};
+  if (!params_.ground_frame.empty() && params_.ground_frame != grid_frame)
+  {
+    frames.push_back(params_.ground_frame);
+  }
+  return frames;
+}
+
+double ProjectionStage::groundZ(const tf2::BufferCore& tf, const std::string& grid_frame,
+                                const ros::Time& stamp) const
+{
+  if (params_.ground_frame.empty())
+  {
+    return params_.ground_height;
+  }
+  const Eigen::Isometry3d grid_from_ground =
+      tf2::transformToEigen(tf.lookupTransform(grid_frame, params_.ground_frame, stamp));
+  return (grid_from_ground * Eigen::Vector3d(0.0, 0.0, params_.ground_height)).z();
+}
+
+ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
+                                            const tf2::BufferCore& tf, std::size_t* invalid_cells) const
+{
+  std::unique_ptr<PinholeCamera> camera;
+  try
+  {
+    camera = std::make_unique<PinholeCamera>(pinholeFromCameraInfo(info));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw ProjectionSkipped("unusable camera_info (frame '" + info.header.frame_id + "'): " + e.what());
+  }
+  const ros::Time& image_stamp = info.header.stamp;
+  const double grid_age = (image_stamp - grid.header.stamp).toSec();
+  if (std::abs(grid_age) > params_.max_grid_age)
+  {
+    throw ProjectionSkipped("the latest grid (t=" + std::to_string(grid.header.stamp.toSec()) + ") is " +
+                            std::to_string(grid_age) + " s away from the image, more than max_grid_age " +
+                            std::to_string(params_.max_grid_age) + " s");
+  }
+  ProjectionGeometry geometry;
+  geometry.time_offset = grid_age;
+  try
+  {
+    geometry.camera_from_grid =
+        tf2::transformToEigen(tf.lookupTransform(info.header.frame_id, grid.header.frame_id, image_stamp));
+  }
+  catch (const tf2::TransformException& e)
+  {
+    throw ProjectionSkipped("no tf " + info.header.frame_id + " <- " + grid.header.frame_id + ": " + e.what());
+  }
+  try
+  {
+    geometry.ground_z = groundZ(tf, grid.header.frame_id, image_stamp);
+  }
+  catch (const tf2::TransformException& e)
+  {
+    throw ProjectionSkipped("no tf " + grid.header.frame_id + " <- " + params_.ground_frame +
+                            " (ground_frame): " + e.what());
+  }
+  ProjectedCells cells;
+  try
+  {
+    cells = projectGrid(gridCellsViewOf(grid), *camera, geometry, params_.projection);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw ProjectionSkipped(std::string("cannot project the grid: ") + e.what());
+  }
+  if (invalid_cells)
+  {
+    *invalid_cells = cells.cells_invalid;
+  }
+  return projectedGridToMsg(std::move(cells), info.header, grid.header, *camera);
+}
+
+}  // namespace grid_vision_fusion
