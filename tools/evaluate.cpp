@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
 #include "grid_vision_fusion/evaluation/evaluation_report.h"
 #include "grid_vision_fusion/evaluation/kitti_ground_truth.h"
-#include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/offline/detection_bag.h"
 
 namespace gvf = grid_vision_fusion;

@@ -63,12 +63,12 @@ struct Detection
 struct ProjectedPointsView
 {
   std::size_t size = 0;
-  const float* u = nullptr;      ///< pixel column [px]
-  const float* v = nullptr;      ///< pixel row [px]
-  const float* x = nullptr;      ///< cell position x [m], grid frame
-  const float* y = nullptr;      ///< cell position y [m], grid frame
-  const float* vx = nullptr;     ///< cell velocity x [m/s], grid frame
-  const float* vy = nullptr;     ///< cell velocity y [m/s], grid frame
+  const float* u = nullptr;             ///< pixel column [px]
+  const float* v = nullptr;             ///< pixel row [px]
+  const float* x = nullptr;             ///< cell position x [m], grid frame
+  const float* y = nullptr;             ///< cell position y [m], grid frame
+  const float* vx = nullptr;            ///< cell velocity x [m/s], grid frame
+  const float* vy = nullptr;            ///< cell velocity y [m/s], grid frame
   const std::uint8_t* state = nullptr;  ///< CellState values
 };
 

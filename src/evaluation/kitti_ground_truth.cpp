@@ -170,9 +170,9 @@ bool projectVeloBox(const KittiRawCalibration& calibration, int camera,
     c = rectified_from_velo * c;
   }
   const auto cam = static_cast<std::size_t>(camera);
-  const ImageBox projected =
-      projectBoxCorners(corners, calibration.p_rect.at(cam), static_cast<int>(calibration.image_size.at(cam)[0]),
-                        static_cast<int>(calibration.image_size.at(cam)[1]), near_plane_m);
+  const ImageBox projected = projectBoxCorners(
+      corners, calibration.p_rect.at(cam), static_cast<int>(calibration.image_size.at(cam)[0]),
+      static_cast<int>(calibration.image_size.at(cam)[1]), near_plane_m);
   box = projected.box;
   truncation = projected.truncation;
   return projected.in_view;

@@ -1,17 +1,17 @@
 // grid_vision_fusion/yolo_detector: image → Detection2DArray, by a YOLO network on OpenCV DNN
 // (backend "opencv_dnn") or from per-frame KITTI label files (backend "replay").
-#include <boost/make_shared.hpp>
-#include <boost/thread/lock_guard.hpp>
-#include <boost/thread/mutex.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/callback_queue_interface.h>
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
+#include <boost/make_shared.hpp>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <chrono>
 #include <functional>
@@ -118,11 +118,13 @@ void YoloDetectorNodelet::onInit()
   std::vector<std::string> unknown;
   try
   {
-    stage_ = std::make_unique<DetectorStage>(DetectorParams::fromParams(NodeHandleParamSource(pnh), &unknown));
+    stage_ =
+        std::make_unique<DetectorStage>(DetectorParams::fromParams(NodeHandleParamSource(pnh), &unknown));
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s", e.what());
+    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s",
+                  e.what());
     return;
   }
   for (const std::string& warning : unknown)
@@ -138,18 +140,20 @@ void YoloDetectorNodelet::onInit()
   nms_threshold_ = params.yolo.nms_threshold;
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  updater_->setHardwareID(params.backend == "replay" ? "replay " + params.replay.directory : params.yolo.model_path);
+  updater_->setHardwareID(params.backend == "replay" ? "replay " + params.replay.directory
+                                                     : params.yolo.model_path);
   updater_->add("yolo_detector", this, &YoloDetectorNodelet::diagnose);
   diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.1, updater_->getPeriod())),
                                           [this](const ros::WallTimerEvent&) { updater_->update(); });
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
-  reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this, boost::placeholders::_1,
-                                               boost::placeholders::_2));
+  reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this,
+                                               boost::placeholders::_1, boost::placeholders::_2));
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
-  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb =
+      boost::bind(&YoloDetectorNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_detections_ = nh.advertise<Detection2DArray>("detections", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("detections/image", 1, image_connect_cb, image_connect_cb);
@@ -176,8 +180,9 @@ void YoloDetectorNodelet::connectCb()
   }
   else if (!sub_image_)
   {
-    sub_image_ = it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
-                                image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+    sub_image_ =
+        it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
+                       image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
   }
 }
 
@@ -259,8 +264,8 @@ bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detectio
   catch (const std::exception& e)
   {
     NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f (%ux%u, %s) not processed: %s",
-                           sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width, image.height,
-                           image.encoding.c_str(), e.what());
+                           sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width,
+                           image.height, image.encoding.c_str(), e.what());
   }
   return false;
 }
@@ -270,7 +275,8 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   const auto start = std::chrono::steady_clock::now();
   std::vector<Detection> detections;
   const bool ok = detect(frame, detections);
-  const double elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(slot_mutex_);
     if (ok)
@@ -292,7 +298,8 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   {
     publishImage(frame.image, detections);
   }
-  pub_detections_.publish(detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
+  pub_detections_.publish(
+      detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
 }
 
 void YoloDetectorNodelet::publishImage(const sensor_msgs::Image::ConstPtr& image_msg,
@@ -318,7 +325,8 @@ void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   std::lock_guard<std::mutex> lock(slot_mutex_);
   if (frames_failed_ > failed_reported_)
   {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "%lu images could not be processed since the last report",
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
+                    "%lu images could not be processed since the last report",
                     static_cast<unsigned long>(frames_failed_ - failed_reported_));
   }
   else if (frames_dropped_ > dropped_reported_)

@@ -50,7 +50,7 @@ PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSour
 }
 
 Pipeline::Pipeline(const PipelineConfig& config, PipelineOutputs outputs)
-  : config_(config), outputs_(std::move(outputs)), tf_(ros::Duration(tf2::BufferCore::DEFAULT_CACHE_TIME))
+    : config_(config), outputs_(std::move(outputs)), tf_(ros::Duration(tf2::BufferCore::DEFAULT_CACHE_TIME))
 {
   if (!(config_.max_tf_wait >= 0.0))
   {
@@ -234,8 +234,8 @@ void Pipeline::processCloud(const sensor_msgs::PointCloud2& msg)
   catch (const tf2::TransformException& e)
   {
     ++stats_.grid_drops;
-    warn("dynamic_grid: scan dropped, no tf " + config_.grid.fixed_frame + " <- " + msg.header.frame_id + ": " +
-         e.what());
+    warn("dynamic_grid: scan dropped, no tf " + config_.grid.fixed_frame + " <- " + msg.header.frame_id +
+         ": " + e.what());
     return;
   }
   if (cycle.reset)
@@ -368,8 +368,9 @@ BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag,
   const std::size_t total = view.size();
   if (total == 0)
   {
-    throw std::runtime_error("bag " + input_bag + " has none of the topics " + topics.points + ", " + topics.image +
-                             ", " + topics.camera_info + ", " + topics.tf + ", " + topics.tf_static);
+    throw std::runtime_error("bag " + input_bag + " has none of the topics " + topics.points + ", " +
+                             topics.image + ", " + topics.camera_info + ", " + topics.tf + ", " +
+                             topics.tf_static);
   }
   ros::Time first, last;
   for (const rosbag::MessageInstance& m : view)

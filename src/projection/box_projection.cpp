@@ -6,8 +6,8 @@
 
 namespace grid_vision_fusion
 {
-std::array<Eigen::Vector3d, 8> orientedBoxCorners(const Eigen::Vector3d& bottom_center, double yaw, double length,
-                                                  double width, double height)
+std::array<Eigen::Vector3d, 8> orientedBoxCorners(const Eigen::Vector3d& bottom_center, double yaw,
+                                                  double length, double width, double height)
 {
   const double c = std::cos(yaw);
   const double s = std::sin(yaw);
@@ -27,7 +27,8 @@ std::array<Eigen::Vector3d, 8> orientedBoxCorners(const Eigen::Vector3d& bottom_
 }
 
 ImageBox projectBoxCorners(const std::array<Eigen::Vector3d, 8>& corners,
-                           const Eigen::Matrix<double, 3, 4>& projection, int width, int height, double near_m)
+                           const Eigen::Matrix<double, 3, 4>& projection, int width, int height,
+                           double near_m)
 {
   static const int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
                                     {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};

@@ -20,12 +20,13 @@ DetectorStage::DetectorStage(const DetectorParams& params) : params_(params)
   }
   else
   {
-    throw std::invalid_argument("detector backend must be \"opencv_dnn\" or \"replay\", got \"" + params_.backend +
-                                "\"");
+    throw std::invalid_argument("detector backend must be \"opencv_dnn\" or \"replay\", got \"" +
+                                params_.backend + "\"");
   }
 }
 
-std::vector<Detection> DetectorStage::detect(const sensor_msgs::Image::ConstPtr& image, std::int64_t frame_index)
+std::vector<Detection> DetectorStage::detect(const sensor_msgs::Image::ConstPtr& image,
+                                             std::int64_t frame_index)
 {
   DetectorImage input;
   input.width = image->width;

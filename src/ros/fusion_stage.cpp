@@ -26,8 +26,8 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   }
   FusedPair pair;
   pair.detections = detectionsFromMsg(detections);
-  const std::string input_error = checkFusionInputs(pair.detections, detections.image_width,
-                                                    detections.image_height, grid.image_width, grid.image_height);
+  const std::string input_error = checkFusionInputs(
+      pair.detections, detections.image_width, detections.image_height, grid.image_width, grid.image_height);
   if (!input_error.empty())
   {
     throw std::invalid_argument(input_error);

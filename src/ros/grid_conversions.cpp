@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 
-
 namespace grid_vision_fusion
 {
 namespace

@@ -19,17 +19,26 @@ DynamicGridCycle GridStage::update(const sensor_msgs::PointCloud2& cloud, const 
   {
     throw UnusableMessage(field_error);
   }
-  const Eigen::Isometry3d world_from_sensor =
-      tf2::transformToEigen(tf.lookupTransform(params_.fixed_frame, cloud.header.frame_id, cloud.header.stamp));
+  const Eigen::Isometry3d world_from_sensor = tf2::transformToEigen(
+      tf.lookupTransform(params_.fixed_frame, cloud.header.frame_id, cloud.header.stamp));
   const DynamicGridCycle cycle = filter_.update(view, world_from_sensor, cloud.header.stamp.toSec());
   header_.stamp = cloud.header.stamp;
   return cycle;
 }
 
-DynamicGrid::Ptr GridStage::gridMsg() const { return dynamicGridToMsg(filter_, header_); }
+DynamicGrid::Ptr GridStage::gridMsg() const
+{
+  return dynamicGridToMsg(filter_, header_);
+}
 
-nav_msgs::OccupancyGrid::Ptr GridStage::occupancyMsg() const { return occupancyGridToMsg(filter_, header_); }
+nav_msgs::OccupancyGrid::Ptr GridStage::occupancyMsg() const
+{
+  return occupancyGridToMsg(filter_, header_);
+}
 
-sensor_msgs::PointCloud2::Ptr GridStage::cellsMsg() const { return gridCellsToCloud(filter_, header_); }
+sensor_msgs::PointCloud2::Ptr GridStage::cellsMsg() const
+{
+  return gridCellsToCloud(filter_, header_);
+}
 
 }  // namespace grid_vision_fusion

@@ -59,10 +59,22 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, FrameIndexSource& out)
 {
   return enumFromParam(value, out, frameIndexSourceFromString);
 }
-XmlRpc::XmlRpcValue toParamValue(TieRule value) { return toParamValue(toString(value)); }
-XmlRpc::XmlRpcValue toParamValue(ResizeMode value) { return toParamValue(toString(value)); }
-XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value) { return toParamValue(toString(value)); }
-XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value) { return toParamValue(toString(value)); }
+XmlRpc::XmlRpcValue toParamValue(TieRule value)
+{
+  return toParamValue(toString(value));
+}
+XmlRpc::XmlRpcValue toParamValue(ResizeMode value)
+{
+  return toParamValue(toString(value));
+}
+XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value)
+{
+  return toParamValue(toString(value));
+}
+XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value)
+{
+  return toParamValue(toString(value));
+}
 
 DynamicGridParams DynamicGridParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
 {
@@ -70,7 +82,8 @@ DynamicGridParams DynamicGridParams::fromParams(const ParamSource& source, std::
   readTable(p, source, unknown);
   require(!p.fixed_frame.empty(), source, "fixed_frame", "must not be empty");
   require(p.queue_size >= 1, source, "queue_size", "must be >= 1, got " + std::to_string(p.queue_size));
-  require(p.expected_rate > 0.0 && std::isfinite(p.expected_rate), source, "expected_rate", "must be > 0 [Hz]");
+  require(p.expected_rate > 0.0 && std::isfinite(p.expected_rate), source, "expected_rate",
+          "must be > 0 [Hz]");
   p.filter.validate();
   return p;
 }
@@ -95,7 +108,8 @@ DetectorParams DetectorParams::fromParams(const ParamSource& source, std::vector
   return p;
 }
 
-GridProjectionParams GridProjectionParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
+GridProjectionParams GridProjectionParams::fromParams(const ParamSource& source,
+                                                      std::vector<std::string>* unknown)
 {
   GridProjectionParams p;
   readTable(p, source, unknown);

@@ -76,7 +76,8 @@ bool isYamlInt(const std::string& text, int& value)
   {
     const char c = text[i];
     const bool sign = i == 0 && (c == '-' || c == '+');
-    if (!sign && !(hex ? std::isxdigit(static_cast<unsigned char>(c)) : std::isdigit(static_cast<unsigned char>(c))))
+    if (!sign &&
+        !(hex ? std::isxdigit(static_cast<unsigned char>(c)) : std::isdigit(static_cast<unsigned char>(c))))
     {
       return false;
     }
@@ -459,11 +460,26 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, std::s
   return true;
 }
 
-XmlRpc::XmlRpcValue toParamValue(bool value) { return XmlRpc::XmlRpcValue(value); }
-XmlRpc::XmlRpcValue toParamValue(int value) { return XmlRpc::XmlRpcValue(value); }
-XmlRpc::XmlRpcValue toParamValue(std::uint32_t value) { return XmlRpc::XmlRpcValue(static_cast<int>(value)); }
-XmlRpc::XmlRpcValue toParamValue(double value) { return XmlRpc::XmlRpcValue(value); }
-XmlRpc::XmlRpcValue toParamValue(const std::string& value) { return XmlRpc::XmlRpcValue(value); }
+XmlRpc::XmlRpcValue toParamValue(bool value)
+{
+  return XmlRpc::XmlRpcValue(value);
+}
+XmlRpc::XmlRpcValue toParamValue(int value)
+{
+  return XmlRpc::XmlRpcValue(value);
+}
+XmlRpc::XmlRpcValue toParamValue(std::uint32_t value)
+{
+  return XmlRpc::XmlRpcValue(static_cast<int>(value));
+}
+XmlRpc::XmlRpcValue toParamValue(double value)
+{
+  return XmlRpc::XmlRpcValue(value);
+}
+XmlRpc::XmlRpcValue toParamValue(const std::string& value)
+{
+  return XmlRpc::XmlRpcValue(value);
+}
 
 XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, std::string>& value)
 {
@@ -516,8 +532,9 @@ std::vector<std::string> ParamReader::unknownParams() const
   std::vector<std::string> warnings;
   for (const std::string& name : source_.names())
   {
-    const bool known = std::any_of(known_.begin(), known_.end(), [&](const std::string& k)
-                                   { return name == k || name.rfind(k + "/", 0) == 0; });
+    const bool known =
+        std::any_of(known_.begin(), known_.end(),
+                    [&](const std::string& k) { return name == k || name.rfind(k + "/", 0) == 0; });
     if (!known)
     {
       warnings.push_back("unknown parameter " + source_.describe(name) + " ignored (did you mean " +

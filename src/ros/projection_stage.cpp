@@ -66,7 +66,8 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
   }
   catch (const tf2::TransformException& e)
   {
-    throw ProjectionSkipped("no tf " + info.header.frame_id + " <- " + grid.header.frame_id + ": " + e.what());
+    throw ProjectionSkipped("no tf " + info.header.frame_id + " <- " + grid.header.frame_id + ": " +
+                            e.what());
   }
   try
   {

@@ -50,7 +50,10 @@ cv::Vec3d roadColor(const Eigen::Vector3d& p, const RoadStyle& road)
   return kAsphalt;
 }
 
-double shade(const Eigen::Vector3d& normal) { return 0.35 + 0.65 * std::max(0.0, normal.dot(kLight)); }
+double shade(const Eigen::Vector3d& normal)
+{
+  return 0.35 + 0.65 * std::max(0.0, normal.dot(kLight));
+}
 
 }  // namespace
 
@@ -124,7 +127,8 @@ RenderedImage renderCamera(const SceneSnapshot& scene, const std::vector<std::ui
       else if (hit.object >= RayHit::kSceneryBase)
       {
         const auto index = static_cast<std::size_t>(hit.object - RayHit::kSceneryBase);
-        color = toVec(index < scenery_colors_rgb.size() ? scenery_colors_rgb[index] : 0x808080U) * shade(hit.normal);
+        color = toVec(index < scenery_colors_rgb.size() ? scenery_colors_rgb[index] : 0x808080U) *
+                shade(hit.normal);
       }
       else if (hit.hit())
       {

@@ -17,7 +17,8 @@ BoxWorldLidar::BoxWorldLidar(const BoxWorldLidarConfig& config) : rng_(config.se
   ground_.slope_x = config.ground_slope_x;
 }
 
-std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_sensor, const std::vector<Box>& boxes)
+std::vector<float> BoxWorldLidar::scan(const Eigen::Isometry3d& world_from_sensor,
+                                       const std::vector<Box>& boxes)
 {
   std::vector<Actor> actors;
   actors.reserve(boxes.size());

@@ -80,7 +80,8 @@ void expectYamlMatchesTable(const std::string& file, const std::set<std::string>
                          << ") is not documented in " << file;
     if (configured.count(name))
     {
-      EXPECT_FALSE(sameValue(in_file, default_value)) << name << " is listed as configured but holds the default";
+      EXPECT_FALSE(sameValue(in_file, default_value))
+          << name << " is listed as configured but holds the default";
     }
     else
     {
@@ -162,7 +163,8 @@ TEST(NodeParams, OneScoreThresholdForBothDetectorBackends)
   YamlParamSource source = YamlParamSource::fromString("backend: replay\nscore_threshold: 0.3\n", "det.yaml");
   source.set("replay/directory", XmlRpc::XmlRpcValue(std::string("/tmp")));
   EXPECT_DOUBLE_EQ(DetectorParams::fromParams(source).replay.score_threshold, 0.3);
-  const YamlParamSource unset = YamlParamSource::fromString("backend: replay\nreplay: {directory: /tmp}\n", "det.yaml");
+  const YamlParamSource unset =
+      YamlParamSource::fromString("backend: replay\nreplay: {directory: /tmp}\n", "det.yaml");
   EXPECT_DOUBLE_EQ(DetectorParams::fromParams(unset).replay.score_threshold, kDefaultScoreThreshold);
 }
 
@@ -183,7 +185,8 @@ TEST(NodeParams, AMisspeltKeyIsReportedWithTheNearestValidOne)
 TEST(NodeParams, MapEntriesBelongToTheirMapParameter)
 {
   const YamlParamSource source = YamlParamSource::fromString(
-      "backend: replay\nreplay: {directory: /tmp, class_map: {Car: car, Van: van}, first_idx: 3}\n", "det.yaml");
+      "backend: replay\nreplay: {directory: /tmp, class_map: {Car: car, Van: van}, first_idx: 3}\n",
+      "det.yaml");
   std::vector<std::string> unknown;
   DetectorParams::fromParams(source, &unknown);
   ASSERT_EQ(unknown.size(), 1U);

@@ -87,7 +87,10 @@ public:
     return detectionsOf(image.frame_index, image.width, image.height);
   }
   /// The score threshold; there is no NMS (`nms_threshold` is ignored).
-  void setThresholds(double score_threshold, double /*nms_threshold*/) override { setScoreThreshold(score_threshold); }
+  void setThresholds(double score_threshold, double /*nms_threshold*/) override
+  {
+    setScoreThreshold(score_threshold);
+  }
   /// "replay of <directory>/<file_pattern>, frame index from the <counter|header seq>".
   std::string description() const override;
 

@@ -29,8 +29,8 @@ struct DetectorImage
 {
   cv::Mat pixels;  ///< the image; left empty for a detector that does not need pixels
   PixelFormat format = PixelFormat::kBgr8;
-  std::uint32_t width = 0;       ///< [px]
-  std::uint32_t height = 0;      ///< [px]
+  std::uint32_t width = 0;        ///< [px]
+  std::uint32_t height = 0;       ///< [px]
   std::int64_t frame_index = -1;  ///< what Detector::frameIndex() gave at the image's arrival
 };
 

@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/detection/kitti_labels.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
 #include "grid_vision_fusion/kitti/kitti_calibration.h"
-#include "grid_vision_fusion/detection/kitti_labels.h"
 #include "grid_vision_fusion/kitti/kitti_raw.h"
 
 namespace grid_vision_fusion

@@ -14,8 +14,8 @@ namespace grid_vision_fusion
 /// The 8 corners of a box whose bottom face is centred at `bottom_center` [m], turned by `yaw`
 /// [rad] about +z (its length along the turned x axis): bottom 4 counter-clockwise from
 /// front-left, then the top 4 in the same order.
-std::array<Eigen::Vector3d, 8> orientedBoxCorners(const Eigen::Vector3d& bottom_center, double yaw, double length,
-                                                  double width, double height);
+std::array<Eigen::Vector3d, 8> orientedBoxCorners(const Eigen::Vector3d& bottom_center, double yaw,
+                                                  double length, double width, double height);
 
 /// A box projected into an image.
 struct ImageBox
@@ -30,6 +30,7 @@ struct ImageBox
 /// against the plane at depth `near_m` [m], the projected box is clipped to the `width` ×
 /// `height` image. `in_view` is false when nothing of it lies in the image.
 ImageBox projectBoxCorners(const std::array<Eigen::Vector3d, 8>& corners,
-                           const Eigen::Matrix<double, 3, 4>& projection, int width, int height, double near_m);
+                           const Eigen::Matrix<double, 3, 4>& projection, int width, int height,
+                           double near_m);
 
 }  // namespace grid_vision_fusion

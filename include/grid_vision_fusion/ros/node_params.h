@@ -106,8 +106,8 @@ struct DetectorParams
 {
   std::string backend = "opencv_dnn";  ///< "opencv_dnn" (a YOLO network) or "replay" (label files)
   bool lazy = true;
-  YoloDetectorConfig yolo;        ///< used with opencv_dnn (keys without prefix)
-  DetectionReplayConfig replay;   ///< used with replay (keys replay/...)
+  YoloDetectorConfig yolo;       ///< used with opencv_dnn (keys without prefix)
+  DetectionReplayConfig replay;  ///< used with replay (keys replay/...)
 
   /// Reads and validates the configuration of the chosen backend; `unknown` as above.
   /// @throws std::invalid_argument naming the parameter at fault.
@@ -159,7 +159,8 @@ struct GridProjectionParams
   GridProjectionConfig projection;
 
   /// @throws std::invalid_argument naming the parameter at fault.
-  static GridProjectionParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+  static GridProjectionParams fromParams(const ParamSource& source,
+                                         std::vector<std::string>* unknown = nullptr);
 };
 
 template <typename Visitor>
