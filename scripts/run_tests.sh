@@ -9,7 +9,7 @@ set -o pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # The workspace lives outside the repository: a workspace inside the package folder would make
-# a symbolic-link loop (src/grid_vision_fusion -> the repository) that rosrun's search follows.
+# a symbolic-link loop (workspace/src/grid_vision_fusion -> the repository) that rosrun's search follows.
 workspace=${GVF_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/grid_vision_fusion/workspace}
 jobs=${GVF_JOBS:-$(nproc)}
 export PATH=/usr/bin:/bin:$PATH

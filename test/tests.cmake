@@ -97,3 +97,11 @@ roslaunch_add_file_check(launch/perception.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch model_weights:=yolov3.weights bag:=drive.bag record:=out.bag)
 roslaunch_add_file_check(test/nodelets USE_TEST_DEPENDENCIES)
+
+# --- repository rules: formatting, cited paths, what the plugin library links -----------------
+find_program(GVF_CLANG_FORMAT NAMES clang-format clang-format-14)
+gvf_gtest(test_repository_rules
+  SOURCES test/repository/test_repository_rules.cpp
+  DEFINITIONS GVF_CLANG_FORMAT="${GVF_CLANG_FORMAT}"
+    GVF_PLUGIN_LIBRARY="$<TARGET_FILE:grid_vision_fusion_nodelets>"
+  DEPENDS grid_vision_fusion_nodelets)

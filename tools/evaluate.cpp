@@ -4,7 +4,7 @@
 //
 //   rosrun grid_vision_fusion evaluate --drive <drive_sync dir> --detections <bag> --output <dir>
 //
-// Progress and notes go to stderr, the report tables to stdout. See doc/evaluate.md.
+// Progress and notes go to stderr, the report tables to stdout. See doc/tools/evaluate.md.
 #include <unistd.h>
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // kitti_to_bag: converts a KITTI raw synced drive into a ROS bag with kitti2bag's topic and frame
-// names and the camera model of the rectified images (see doc/kitti_to_bag.md).
+// names and the camera model of the rectified images (see doc/tools/kitti_to_bag.md).
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/offline/kitti_bag_writer.h"
 

@@ -1,5 +1,5 @@
-// CMCDOT-style dynamic occupancy grid filter (a reconstruction, see DESIGN.md "Grid filter"
-// and doc/grid_filter.md, whose equation numbers the comments below refer to).
+// CMCDOT-style dynamic occupancy grid filter (a documented reconstruction,
+// doc/grid_filter.md, whose equation numbers the comments below refer to).
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"
 
 #include <algorithm>

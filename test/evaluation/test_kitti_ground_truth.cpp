@@ -106,8 +106,8 @@ TEST(KittiGroundTruth, FirstCarBoxInFrameZeroMatchesAnIndependentProjection)
 
 TEST(KittiGroundTruth, ProjectsAPointTheWayTheDesignSays)
 {
-  // DESIGN.md check values, camera 2: velodyne (10, 0, −1.73) → (615.3, 303.5). A 0.02 m box
-  // around that point projects to a box of about 1.5 px around it.
+  // KITTI check values of the 2011_09_26 calibration, camera 2: velodyne (10, 0, −1.73) → (615.3, 303.5). A
+  // 0.02 m box around that point projects to a box of about 1.5 px around it.
   BoundingBox box;
   double truncation = 1.0;
   ASSERT_TRUE(projectVeloBox(drive().calibration, 2, Eigen::Vector3d(10.0, 0.0, -1.74), 0.0, 0.02, 0.02, 0.02,

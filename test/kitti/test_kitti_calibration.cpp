@@ -115,7 +115,7 @@ TEST(KittiRawCalibration, VeloToImageIsTheKittiChain)
   rect.topLeftCorner<3, 3>() = calib.r_rect[0];
   const ProjectionMatrix expected = calib.p_rect[2] * rect * calib.cam0_from_velo.matrix();
   EXPECT_TRUE(calib.veloToImage(2).isApprox(expected, 1e-12));
-  // KITTI check values of DESIGN.md: (10, 0, −1.73) → (615.3, 303.5).
+  // KITTI check values of the 2011_09_26 calibration: (10, 0, −1.73) → (615.3, 303.5).
   const Eigen::Vector3d pixel = calib.veloToImage(2) * Eigen::Vector4d(10.0, 0.0, -1.73, 1.0);
   EXPECT_NEAR(pixel.x() / pixel.z(), 615.3, 0.5);
   EXPECT_NEAR(pixel.y() / pixel.z(), 303.5, 0.5);

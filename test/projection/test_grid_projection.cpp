@@ -493,7 +493,7 @@ TEST(GridProjection, KittiCarCellsProjectIntoItsFusionBand)
 {
   // Frame 000002: occupy the grid cells (velodyne frame) that hold lidar points of the labelled
   // car, project their ground points with projectGrid() on the car's own ground height, and
-  // check they fall in the car's fusion band (bottom edge ± h/4, DESIGN.md).
+  // check they fall in the car's fusion band (bottom edge ± h/4, doc/nodelets/fusion.md).
   const std::string dir = kDataDir + "/kitti_object_samples/";
   const KittiObjectCalibration calib = KittiObjectCalibration::read(dir + "calib/000002.txt");
   const Eigen::Isometry3d rect_from_velo = calib.rectifiedFromVelo();

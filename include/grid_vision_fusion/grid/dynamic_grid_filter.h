@@ -1,6 +1,6 @@
 // CMCDOT-style dynamic occupancy grid: four analytic states per cell (static, dynamic, empty,
 // unknown), the velocity of the dynamic part carried by particles (conditional Monte Carlo).
-// This is the documented reconstruction of DESIGN.md ("Grid filter"); every equation, with its
+// This is a documented reconstruction of CMCDOT (Rummelhard et al. 2015); every equation, with its
 // parameters and their defaults, is in doc/grid_filter.md.
 #pragma once
 
