@@ -1,0 +1,219 @@
+// The four stage classes without a master: tf from a hand-fed tf2::BufferCore, messages built
+// here. What the nodelets and the offline Pipeline rely on: a stage refuses unusable input with
+// the exception its callers count, and turns good input into the message of its output topic.
+#include <gtest/gtest.h>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2/exceptions.h>
+
+#include <cmath>
+
+#include "grid_vision_fusion/ros/detector_stage.h"
+#include "grid_vision_fusion/ros/fusion_stage.h"
+#include "grid_vision_fusion/ros/grid_stage.h"
+#include "grid_vision_fusion/ros/projection_stage.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+const ros::Time kStamp(1317042000, 0);
+
+geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child, double x,
+                                          double z, const ros::Time& stamp, double qx = 0.0, double qy = 0.0,
+                                          double qz = 0.0, double qw = 1.0)
+{
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = parent;
+  t.header.stamp = stamp;
+  t.child_frame_id = child;
+  t.transform.translation.x = x;
+  t.transform.translation.z = z;
+  t.transform.rotation.x = qx;
+  t.transform.rotation.y = qy;
+  t.transform.rotation.z = qz;
+  t.transform.rotation.w = qw;
+  return t;
+}
+
+/// A cloud in `frame` with a wall of points 10 m ahead of the sensor (x, y, z float32).
+sensor_msgs::PointCloud2 wallCloud(const std::string& frame)
+{
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.stamp = kStamp;
+  cloud.header.frame_id = frame;
+  sensor_msgs::PointCloud2Modifier modifier(cloud);
+  modifier.setPointCloud2FieldsByString(1, "xyz");
+  modifier.resize(200);
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (int i = 0; i < 200; ++i, ++x, ++y, ++z)
+  {
+    *x = 10.0F;
+    *y = -2.0F + 0.02F * static_cast<float>(i);
+    *z = -1.0F;
+  }
+  return cloud;
+}
+
+TEST(GridStage, UpdatesFromTfAndPublishesInTheFixedFrame)
+{
+  DynamicGridParams params;
+  params.filter.particle_count = 1 << 12;
+  GridStage stage(params);
+  tf2::BufferCore tf;
+  tf.setTransform(transform("world", "velo_link", 5.0, 1.73, kStamp), "test", true);
+
+  const DynamicGridCycle cycle = stage.update(wallCloud("velo_link"), tf);
+  EXPECT_EQ(cycle.sensor.points, 200U);
+  const DynamicGrid::Ptr grid = stage.gridMsg();
+  EXPECT_EQ(grid->header.frame_id, "world");
+  EXPECT_EQ(grid->header.stamp, kStamp);
+  EXPECT_EQ(grid->p_static.size(), static_cast<std::size_t>(params.filter.width * params.filter.height));
+  EXPECT_EQ(stage.occupancyMsg()->header.stamp, kStamp);
+  EXPECT_EQ(stage.cellsMsg()->header.frame_id, "world");
+}
+
+TEST(GridStage, RefusesACloudWithoutFloatFieldsOrWithoutTf)
+{
+  DynamicGridParams params;
+  params.filter.particle_count = 1 << 12;
+  GridStage stage(params);
+  tf2::BufferCore tf;
+  sensor_msgs::PointCloud2 no_z = wallCloud("velo_link");
+  no_z.fields.pop_back();
+  EXPECT_THROW(stage.update(no_z, tf), UnusableMessage);
+  EXPECT_THROW(stage.update(wallCloud("velo_link"), tf), tf2::TransformException);
+  EXPECT_FALSE(stage.filter().initialised()) << "a refused scan must leave the filter untouched";
+}
+
+TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
+{
+  GridProjectionParams params;
+  params.ground_frame = "";
+  params.ground_height = 0.0;
+  ProjectionStage stage(params);
+  EXPECT_EQ(stage.tfFrames("world"), std::vector<std::string>{"world"});
+
+  DynamicGrid grid;
+  grid.header.stamp = kStamp;
+  grid.header.frame_id = "world";
+  grid.info.resolution = 1.0F;
+  grid.info.width = 4;
+  grid.info.height = 4;
+  grid.info.origin.position.x = 8.0;
+  grid.info.origin.position.y = -2.0;
+  grid.info.origin.orientation.w = 1.0;
+  for (auto* array : {&grid.p_static, &grid.p_dynamic, &grid.p_free, &grid.p_unknown, &grid.vx, &grid.vy,
+                      &grid.v_var_x, &grid.v_var_y})
+  {
+    array->assign(16, 0.0F);
+  }
+  grid.p_static.assign(16, 0.9F);
+  sensor_msgs::CameraInfo info;
+  info.header.stamp = kStamp;
+  info.header.frame_id = "camera";
+  info.width = 640;
+  info.height = 480;
+  info.P = {500.0, 0.0, 320.0, 0.0, 0.0, 500.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+
+  tf2::BufferCore tf;
+  EXPECT_THROW(stage.project(grid, info, tf), ProjectionSkipped);  // no tf camera <- world
+  // The optical frame looks along world +x from 1.5 m above the ground (x right = -y, y down = -z).
+  tf.setTransform(transform("world", "camera", 0.0, 1.5, kStamp, -0.5, 0.5, -0.5, 0.5), "test", true);
+  const ProjectedGrid::Ptr projected = stage.project(grid, info, tf);
+  EXPECT_EQ(projected->header.stamp, kStamp);
+  EXPECT_EQ(projected->header.frame_id, "camera");
+  EXPECT_EQ(projected->grid_frame_id, "world");
+  EXPECT_GT(projected->u.size(), 0U);
+
+  DynamicGrid old_grid = grid;
+  old_grid.header.stamp = kStamp - ros::Duration(2.0);
+  try
+  {
+    stage.project(old_grid, info, tf);
+    FAIL() << "a grid 2 s older than the image was projected";
+  }
+  catch (const ProjectionSkipped& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("max_grid_age"), std::string::npos) << e.what();
+  }
+  sensor_msgs::CameraInfo uncalibrated = info;
+  uncalibrated.P.fill(0.0);
+  EXPECT_THROW(stage.project(grid, uncalibrated, tf), ProjectionSkipped);
+}
+
+TEST(DetectorStage, ReplaysLabelsInStepWithTheImagesAndOneThresholdServesBothBackends)
+{
+  DetectorParams params;
+  params.backend = "replay";
+  params.replay.directory = std::string(GVF_TEST_DATA_DIR) + "/kitti_labels/label_2";
+  params.replay.missing_file_is_empty = true;
+  DetectorStage stage(params);
+  EXPECT_FALSE(stage.detector().needsPixels());
+
+  auto image = boost::make_shared<sensor_msgs::Image>();
+  image->width = 1242;
+  image->height = 375;
+  image->encoding = "16UC1";  // the replay does not look at the pixels
+  EXPECT_EQ(stage.frameIndex(*image), 0);
+  EXPECT_EQ(stage.frameIndex(*image), 1);  // counted at arrival, also for an image dropped later
+  const std::vector<Detection> detections = stage.detect(image, 0);
+  EXPECT_FALSE(detections.empty());
+  stage.setThresholds(1.0, 0.45);  // labels score 1.0: still kept at a threshold of 1
+  EXPECT_EQ(stage.detect(image, 0).size(), detections.size());
+  EXPECT_THROW(stage.setThresholds(1.5, 0.45), std::invalid_argument);
+
+  params.backend = "magic";
+  EXPECT_THROW(DetectorStage{params}, std::invalid_argument);
+}
+
+TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
+{
+  FusionStage stage(FusionParams{});
+  Detection2DArray detections;
+  detections.header.stamp = kStamp;
+  detections.header.frame_id = "camera";
+  detections.image_width = 640;
+  detections.image_height = 480;
+  Detection2D box;
+  box.label = "car";
+  box.score = 0.9F;
+  box.x_min = 100.F;
+  box.y_min = 100.F;
+  box.x_max = 200.F;
+  box.y_max = 200.F;
+  detections.detections.push_back(box);
+  ProjectedGrid grid;
+  grid.header = detections.header;
+  grid.grid_frame_id = "world";
+  grid.image_width = 640;
+  grid.image_height = 480;
+  for (auto* array :
+       {&grid.u, &grid.v, &grid.depth, &grid.x, &grid.y, &grid.vx, &grid.vy, &grid.p_static, &grid.p_dynamic})
+  {
+    array->assign(3, 0.F);
+  }
+  grid.u = {150.F, 160.F, 170.F};
+  grid.v = {200.F, 201.F, 202.F};
+  grid.x = {12.F, 12.2F, 12.4F};
+  grid.state.assign(3, ProjectedGrid::STATIC);
+
+  const FusedPair pair = stage.fuse(detections, grid);
+  ASSERT_EQ(pair.objects->objects.size(), 1U);
+  EXPECT_EQ(pair.objects->objects[0].motion, DetectedObject::MOTION_STATIC);
+  EXPECT_NEAR(pair.objects->objects[0].position.x, 12.2, 1e-5);
+  EXPECT_EQ(pair.objects->header.frame_id, "world");
+
+  grid.image_width = 1242;
+  EXPECT_THROW(stage.fuse(detections, grid), std::invalid_argument);  // sizes differ
+
+  FusionConfig bad = stage.config();
+  bad.min_points = 0;
+  EXPECT_THROW(stage.setConfig(bad), std::invalid_argument);
+  EXPECT_EQ(stage.config().min_points, FusionConfig{}.min_points)
+      << "a refused configuration changes nothing";
+}
+
+}  // namespace
+}  // namespace grid_vision_fusion
