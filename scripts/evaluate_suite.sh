@@ -108,7 +108,7 @@ mkdir -p "$out"
 rm -rf "$out/scenarios" "$out/work" "$out/logs" "$out/suite_report.md" "$out/suite_report.json"
 mkdir -p "$out/scenarios" "$out/work" "$out/logs"
 calibration=$root/data/calibration/2011_09_26
-cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//' || true)
+cpu="$(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2 | sed "s/^ *//" || true), $(nproc) cores"
 
 # Runs one scenario; its steps log to logs/<name>.log; the last line of logs/<name>.status says
 # "ok SECONDS" or "failed STEP".
