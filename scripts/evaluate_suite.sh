@@ -151,8 +151,12 @@ failed=""
 done_count=0
 suite_start=$SECONDS
 
+# shellcheck disable=SC2317  # called by the trap
 cleanup_on_signal() {
-  for pid in "${!running[@]}"; do kill -- "-$pid" 2>/dev/null || true; done
+  for pid in "${!running[@]}"; do  # the scenario's current step, then its shell
+    pkill -TERM -P "$pid" 2>/dev/null || true
+    kill "$pid" 2>/dev/null || true
+  done
   wait 2>/dev/null || true
   rm -rf "$out/work" "$out/scenarios"
   echo "evaluate_suite: interrupted" >&2
@@ -181,7 +185,6 @@ wait_one() {
 }
 
 echo "evaluate_suite: ${#names[@]} scenarios from $scenario_dir, $jobs in parallel, output in $out"
-set -m  # each scenario in its own process group (interrupts end the whole step)
 for name in "${names[@]}"; do
   [[ -z "$failed" ]] || break
   while [[ ${#running[@]} -ge $jobs ]]; do wait_one; done
@@ -190,7 +193,6 @@ for name in "${names[@]}"; do
   running[$!]=$name
 done
 while [[ ${#running[@]} -gt 0 ]]; do wait_one; done
-set +m
 wall=$((SECONDS - suite_start))
 
 if [[ -n "$failed" ]]; then
