@@ -23,7 +23,7 @@ struct BenchGrid
 
   /// `occupied_fraction` of the cells occupied (half of them dynamic at 5 m/s), the rest free.
   explicit BenchGrid(double occupied_fraction)
-    : p_static(kCells * kCells), p_dynamic(kCells * kCells), vx(kCells * kCells), vy(kCells * kCells)
+      : p_static(kCells * kCells), p_dynamic(kCells * kCells), vx(kCells * kCells), vy(kCells * kCells)
   {
     std::mt19937 random(42);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -51,19 +51,19 @@ struct BenchGrid
 PinholeCamera kittiCamera()
 {
   Eigen::Matrix<double, 3, 4> p;
-  p << 7.215377e+02, 0.0, 6.095593e+02, 4.485728e+01, 0.0, 7.215377e+02, 1.728540e+02, 2.163791e-01, 0.0, 0.0, 1.0,
-      2.745884e-03;
+  p << 7.215377e+02, 0.0, 6.095593e+02, 4.485728e+01, 0.0, 7.215377e+02, 1.728540e+02, 2.163791e-01, 0.0, 0.0,
+      1.0, 2.745884e-03;
   return PinholeCamera(p, 1242, 375);
 }
 
 ProjectionGeometry kittiGeometry()
 {
   Eigen::Matrix3d r_rect;
-  r_rect << 9.999239e-01, 9.837760e-03, -7.445048e-03, -9.869795e-03, 9.999421e-01, -4.278459e-03, 7.402527e-03,
-      4.351614e-03, 9.999631e-01;
+  r_rect << 9.999239e-01, 9.837760e-03, -7.445048e-03, -9.869795e-03, 9.999421e-01, -4.278459e-03,
+      7.402527e-03, 4.351614e-03, 9.999631e-01;
   Eigen::Isometry3d velo_to_cam = Eigen::Isometry3d::Identity();
-  velo_to_cam.linear() << 7.533745e-03, -9.999714e-01, -6.166020e-04, 1.480249e-02, 7.280733e-04, -9.998902e-01,
-      9.998621e-01, 7.523790e-03, 1.480755e-02;
+  velo_to_cam.linear() << 7.533745e-03, -9.999714e-01, -6.166020e-04, 1.480249e-02, 7.280733e-04,
+      -9.998902e-01, 9.998621e-01, 7.523790e-03, 1.480755e-02;
   velo_to_cam.translation() << -4.069766e-03, -7.631618e-02, -2.717806e-01;
   Eigen::Isometry3d rect = Eigen::Isometry3d::Identity();
   rect.linear() = r_rect;

@@ -12,8 +12,8 @@
 
 #include <cstdint>
 #include <cstdio>
-#include <ctime>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -89,8 +89,10 @@ std::string writeRandomWeights(const std::string& cfg_path, const std::string& d
   out.write(reinterpret_cast<const char*>(version), sizeof(version));
   out.write(reinterpret_cast<const char*>(&seen), sizeof(seen));
   std::mt19937 random(42);
-  auto write = [&out](const std::vector<float>& values) {
-    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
+  auto write = [&out](const std::vector<float>& values)
+  {
+    out.write(reinterpret_cast<const char*>(values.data()),
+              static_cast<std::streamsize>(values.size() * sizeof(float)));
   };
   for (const DarknetParamBlock& block : info.blocks)
   {
@@ -134,7 +136,8 @@ struct Model
   int iterations = 0;
 };
 
-void benchmarkModel(benchmark::State& state, const Model& model, const std::string& weights, const MachinePeak& peak)
+void benchmarkModel(benchmark::State& state, const Model& model, const std::string& weights,
+                    const MachinePeak& peak)
 {
   YoloDetectorConfig config;
   config.model_path = kCfgDir + "/" + model.cfg;
@@ -159,8 +162,8 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
   const double flops = static_cast<double>(detector.flops());
   state.counters["net_GFLOP"] = flops / 1e9;
   // A rate counter is divided by the measured (real) time: achieved GFLOP per second.
-  state.counters["achieved_GFLOP"] = benchmark::Counter(flops / 1e9 * static_cast<double>(state.iterations()),
-                                                        benchmark::Counter::kIsRate);
+  state.counters["achieved_GFLOP"] =
+      benchmark::Counter(flops / 1e9 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["peak_GFLOPs"] = peak.gflops();
   state.counters["FLOP_bound_ms"] = flops / (peak.gflops() * 1e9) * 1e3;
 }
@@ -176,7 +179,8 @@ int main(int argc, char** argv)
             << " FP32 FLOP/cycle = " << peak.gflops() << " GFLOP/s";
   benchmark::AddCustomContext("cpu", peak.model);
   benchmark::AddCustomContext("peak", peak_text.str());
-  benchmark::AddCustomContext("opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");
+  benchmark::AddCustomContext(
+      "opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");
 
   char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
   if (mkdtemp(pattern) == nullptr)
@@ -196,10 +200,8 @@ int main(int argc, char** argv)
     for (const Model& model : models)
     {
       const std::string weights = model.cfg == "yolov3.cfg" ? yolov3_weights : tiny_weights;
-      benchmark::RegisterBenchmark(model.name.c_str(),
-                                   [model, weights, peak](benchmark::State& state) {
-                                     benchmarkModel(state, model, weights, peak);
-                                   })
+      benchmark::RegisterBenchmark(model.name.c_str(), [model, weights, peak](benchmark::State& state)
+                                   { benchmarkModel(state, model, weights, peak); })
           ->Unit(benchmark::kMillisecond)
           ->Iterations(model.iterations)
           ->MeasureProcessCPUTime()

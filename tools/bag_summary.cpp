@@ -165,7 +165,8 @@ int main(int argc, char** argv)
     {
       return fail("no " + objects_topic + " message in " + bag_path);
     }
-    std::cout << "\n" << frames << " frames of " << objects_topic << ", " << images << " overlay images of "
+    std::cout << "\n"
+              << frames << " frames of " << objects_topic << ", " << images << " overlay images of "
               << images_topic << "\n\nobjects per frame:\n";
     for (const auto& [count, n] : frames_with_n_objects)
     {
@@ -175,9 +176,10 @@ int main(int argc, char** argv)
     for (const auto& [label, c] : per_class)
     {
       char line[160];
-      std::snprintf(line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1], c.by_motion[2],
-                    c.by_motion[0],
-                    c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5).c_str() : "-");
+      std::snprintf(
+          line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1], c.by_motion[2],
+          c.by_motion[0],
+          c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5).c_str() : "-");
       std::cout << line;
     }
   }

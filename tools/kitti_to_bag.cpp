@@ -93,7 +93,8 @@ bool parseArguments(int argc, char** argv, grid_vision_fusion::KittiBagOptions& 
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
+    const auto value = [&]() -> std::string
+    {
       if (i + 1 >= argc)
       {
         throw UsageError(arg + " needs a value");
@@ -139,7 +140,8 @@ bool parseArguments(int argc, char** argv, grid_vision_fusion::KittiBagOptions& 
   }
   if (positional.size() != 2)
   {
-    throw UsageError("want DRIVE_DIR and OUTPUT.bag, got " + std::to_string(positional.size()) + " argument(s)");
+    throw UsageError("want DRIVE_DIR and OUTPUT.bag, got " + std::to_string(positional.size()) +
+                     " argument(s)");
   }
   options.drive_dir = positional[0];
   options.output_bag = positional[1];
@@ -179,10 +181,12 @@ int main(int argc, char** argv)
   std::unique_ptr<grid_vision_fusion::ProgressBar> progress;
   if (!quiet)
   {
-    options.progress = [&progress, terminal](std::size_t done, std::size_t total) {
+    options.progress = [&progress, terminal](std::size_t done, std::size_t total)
+    {
       if (!progress)
       {
-        progress = std::make_unique<grid_vision_fusion::ProgressBar>(std::cerr, total, "kitti_to_bag frames", terminal);
+        progress = std::make_unique<grid_vision_fusion::ProgressBar>(std::cerr, total, "kitti_to_bag frames",
+                                                                     terminal);
       }
       progress->update(done);
     };
@@ -196,8 +200,8 @@ int main(int argc, char** argv)
     }
     if (!quiet)
     {
-      std::cerr << "kitti_to_bag: wrote " << summary.frames << " frames (" << summary.messages << " messages) to "
-                << summary.output_bag << "\n";
+      std::cerr << "kitti_to_bag: wrote " << summary.frames << " frames (" << summary.messages
+                << " messages) to " << summary.output_bag << "\n";
     }
   }
   catch (const std::exception& e)

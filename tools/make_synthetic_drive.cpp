@@ -131,8 +131,9 @@ int main(int argc, char** argv)
       const std::string package = ros::package::getPath("grid_vision_fusion");
       if (package.empty())
       {
-        return fail("cannot find the package grid_vision_fusion (source its setup.bash) for the default "
-                    "--scenario and --calibration; give both explicitly");
+        return fail(
+            "cannot find the package grid_vision_fusion (source its setup.bash) for the default "
+            "--scenario and --calibration; give both explicitly");
       }
       if (scenario_path.empty())
       {
@@ -152,17 +153,19 @@ int main(int argc, char** argv)
     else
     {
       const SyntheticScenario base = explicit_scenario ? loadScenario(scenario_path) : SyntheticScenario{};
-      scenario = recordedDriveScenario(recorded_drive, KittiRawCalibration::readDirectory(options.calibration_dir), base);
+      scenario = recordedDriveScenario(recorded_drive,
+                                       KittiRawCalibration::readDirectory(options.calibration_dir), base);
       scenario_path = recorded_drive;
     }
     if (seed >= 0)
     {
       scenario.seed = static_cast<std::uint32_t>(seed);
     }
-    const int frames = options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
+    const int frames =
+        options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
     std::cerr << "make_synthetic_drive: " << scenario_path << ": " << scenario.actors.size() << " actors, "
-              << scenario.scenery.size() << " buildings, " << frames << " frames at " << scenario.frame_rate_hz
-              << " Hz\n";
+              << scenario.scenery.size() << " buildings, " << frames << " frames at "
+              << scenario.frame_rate_hz << " Hz\n";
     ProgressBar bar(std::cerr, static_cast<std::size_t>(frames), "frames", isatty(STDERR_FILENO) != 0);
     const SyntheticDriveSummary summary = writeSyntheticDrive(
         scenario, options, [&](int done, int) { bar.update(static_cast<std::size_t>(done)); });

@@ -112,23 +112,25 @@ std::string packagePath(const std::string& what)
   const std::string package = ros::package::getPath("grid_vision_fusion");
   if (package.empty())
   {
-    throw std::runtime_error("cannot find the package grid_vision_fusion (source its setup.bash) for the default " +
-                             what + "; give it explicitly");
+    throw std::runtime_error(
+        "cannot find the package grid_vision_fusion (source its setup.bash) for the default " + what +
+        "; give it explicitly");
   }
   return package;
 }
 
 int run(const Options& o)
 {
-  const std::string config_dir = o.config_dir.empty() ? packagePath("--config-dir") + "/config" : o.config_dir;
+  const std::string config_dir =
+      o.config_dir.empty() ? packagePath("--config-dir") + "/config" : o.config_dir;
   gvf::YamlParamSource grid = gvf::YamlParamSource::fromFile(
       o.grid_config.empty() ? config_dir + "/dynamic_grid.yaml" : o.grid_config);
   gvf::YamlParamSource detector = gvf::YamlParamSource::fromFile(
       o.detector_config.empty() ? config_dir + "/yolo_detector.yaml" : o.detector_config);
   gvf::YamlParamSource projection = gvf::YamlParamSource::fromFile(
       o.projection_config.empty() ? config_dir + "/grid_projection.yaml" : o.projection_config);
-  gvf::YamlParamSource fusion = gvf::YamlParamSource::fromFile(
-      o.fusion_config.empty() ? config_dir + "/fusion.yaml" : o.fusion_config);
+  gvf::YamlParamSource fusion =
+      gvf::YamlParamSource::fromFile(o.fusion_config.empty() ? config_dir + "/fusion.yaml" : o.fusion_config);
   // What the launch files set on top of the YAML files (yolo_detector.launch, kitti_replay.launch).
   if (!o.backend.empty())
   {
@@ -140,8 +142,9 @@ int run(const Options& o)
   {
     detector.set("model", o.model.empty() ? packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model);
     detector.set("weights", o.weights);
-    detector.set("class_names",
-                 o.class_names.empty() ? packagePath("--class-names") + "/models/yolo/coco.names" : o.class_names);
+    detector.set("class_names", o.class_names.empty()
+                                    ? packagePath("--class-names") + "/models/yolo/coco.names"
+                                    : o.class_names);
   }
   detector.set("replay/directory", o.replay_directory);
   detector.set("replay/file_pattern", o.replay_file_pattern);
@@ -153,7 +156,8 @@ int run(const Options& o)
   const std::string tmp = o.output + ".tmp";
   rosbag::Bag out(tmp, rosbag::bagmode::Write);
   gvf::PipelineOutputs outputs;
-  outputs.objects = [&out](const gvf::DetectedObjectArray::ConstPtr& m) { out.write("/objects", m->header.stamp, m); };
+  outputs.objects = [&out](const gvf::DetectedObjectArray::ConstPtr& m)
+  { out.write("/objects", m->header.stamp, m); };
   if (o.write_grids)
   {
     outputs.grid = [&out](const gvf::DynamicGrid::ConstPtr& m) { out.write("/grid", m->header.stamp, m); };
@@ -195,14 +199,14 @@ int run(const Options& o)
   }
 
   const gvf::PipelineStats& s = pipeline.stats();
-  std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, " << s.images
-            << " images, " << s.camera_infos << " camera_infos -> " << s.grids << " grids, " << s.projections
-            << " projected grids, " << s.objects << " object arrays on /objects\n";
+  std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, "
+            << s.images << " images, " << s.camera_infos << " camera_infos -> " << s.grids << " grids, "
+            << s.projections << " projected grids, " << s.objects << " object arrays on /objects\n";
   if (s.grid_drops + s.detector_drops + s.projection_drops + s.fusion_drops + s.grid_resets > 0)
   {
     std::cerr << "run_pipeline: dropped: " << s.grid_drops << " scans, " << s.detector_drops << " images, "
-              << s.projection_drops << " camera_infos, " << s.fusion_drops << " fusion inputs; " << s.grid_resets
-              << " grid resets. Reasons:\n";
+              << s.projection_drops << " camera_infos, " << s.fusion_drops << " fusion inputs; "
+              << s.grid_resets << " grid resets. Reasons:\n";
     for (const std::string& w : s.warnings)
     {
       std::cerr << "  " << w << "\n";
@@ -218,9 +222,10 @@ int run(const Options& o)
     const double wall_per_frame = 1e3 * summary.wall_s / frames;
     std::printf("benchmark: %zu frames, bag %.1f s, wall %.1f s\n", summary.frames, summary.bag_duration_s,
                 summary.wall_s);
-    std::printf("  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
-                "fusion %.3f, sum %.2f\n",
-                grid, config.backend.c_str(), det, proj, fus, grid + det + proj + fus);
+    std::printf(
+        "  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
+        "fusion %.3f, sum %.2f\n",
+        grid, config.backend.c_str(), det, proj, fus, grid + det + proj + fus);
     std::printf("  wall per frame (reading, all stages, writing): %.2f ms, %.1f frames/s, %.2fx real time\n",
                 wall_per_frame, 1e3 / wall_per_frame,
                 summary.wall_s > 0 ? summary.bag_duration_s / summary.wall_s : 0.0);
@@ -272,21 +277,36 @@ int main(int argc, char** argv)
         return 1;
       }
       const std::string value = argv[++i];
-      if (arg == "--bag") o.bag = value;
-      else if (arg == "--output") o.output = value;
-      else if (arg == "--config-dir") o.config_dir = value;
-      else if (arg == "--grid-config") o.grid_config = value;
-      else if (arg == "--detector-config") o.detector_config = value;
-      else if (arg == "--projection-config") o.projection_config = value;
-      else if (arg == "--fusion-config") o.fusion_config = value;
-      else if (arg == "--backend") o.backend = value;
-      else if (arg == "--model") o.model = value;
-      else if (arg == "--weights") o.weights = value;
-      else if (arg == "--class-names") o.class_names = value;
-      else if (arg == "--replay-directory") o.replay_directory = value;
-      else if (arg == "--replay-file-pattern") o.replay_file_pattern = value;
-      else if (arg == "--replay-frame-index") o.replay_frame_index = value;
-      else if (arg == "--topics") parseTopics(value, o.topics);
+      if (arg == "--bag")
+        o.bag = value;
+      else if (arg == "--output")
+        o.output = value;
+      else if (arg == "--config-dir")
+        o.config_dir = value;
+      else if (arg == "--grid-config")
+        o.grid_config = value;
+      else if (arg == "--detector-config")
+        o.detector_config = value;
+      else if (arg == "--projection-config")
+        o.projection_config = value;
+      else if (arg == "--fusion-config")
+        o.fusion_config = value;
+      else if (arg == "--backend")
+        o.backend = value;
+      else if (arg == "--model")
+        o.model = value;
+      else if (arg == "--weights")
+        o.weights = value;
+      else if (arg == "--class-names")
+        o.class_names = value;
+      else if (arg == "--replay-directory")
+        o.replay_directory = value;
+      else if (arg == "--replay-file-pattern")
+        o.replay_file_pattern = value;
+      else if (arg == "--replay-frame-index")
+        o.replay_frame_index = value;
+      else if (arg == "--topics")
+        parseTopics(value, o.topics);
       else if (arg == "--max-tf-wait")
       {
         std::size_t used = 0;

@@ -26,7 +26,8 @@ bool isFramePattern(const std::string& pattern)
     {
       continue;
     }
-    while (i < pattern.size() && (pattern[i] == '0' || pattern[i] == '-' || pattern[i] == '+' || pattern[i] == ' '))
+    while (i < pattern.size() &&
+           (pattern[i] == '0' || pattern[i] == '-' || pattern[i] == '+' || pattern[i] == ' '))
     {
       ++i;
     }
@@ -78,8 +79,9 @@ void DetectionReplayConfig::validate() const
   }
   if (!isFramePattern(file_pattern))
   {
-    throw std::invalid_argument("replay file_pattern must hold exactly one integer conversion such as %06d, got \"" +
-                                file_pattern + "\"");
+    throw std::invalid_argument(
+        "replay file_pattern must hold exactly one integer conversion such as %06d, got \"" + file_pattern +
+        "\"");
   }
   if (index_source == FrameIndexSource::kCounter && first_index < 0)
   {
@@ -88,11 +90,13 @@ void DetectionReplayConfig::validate() const
   }
   if (!(default_score >= 0.0 && default_score <= 1.0))
   {
-    throw std::invalid_argument("replay default_score must be in [0, 1], got " + std::to_string(default_score));
+    throw std::invalid_argument("replay default_score must be in [0, 1], got " +
+                                std::to_string(default_score));
   }
   if (!(score_threshold >= 0.0 && score_threshold <= 1.0))
   {
-    throw std::invalid_argument("replay score_threshold must be in [0, 1], got " + std::to_string(score_threshold));
+    throw std::invalid_argument("replay score_threshold must be in [0, 1], got " +
+                                std::to_string(score_threshold));
   }
   for (const auto& entry : class_map)
   {
@@ -110,7 +114,8 @@ DetectionReplay::DetectionReplay(const DetectionReplayConfig& config) : config_(
   std::error_code error;
   if (!std::filesystem::is_directory(config_.directory, error))
   {
-    throw std::invalid_argument("replay directory " + config_.directory + " does not exist or is not a directory");
+    throw std::invalid_argument("replay directory " + config_.directory +
+                                " does not exist or is not a directory");
   }
   counter_ = config_.first_index;
 }

@@ -138,8 +138,9 @@ void DynamicGridConfig::validate() const
   require(std::isfinite(max_speed) && max_speed > 0.0, "max_speed", "must be > 0 [m/s]");
   require(std::isfinite(birth_motion_speed) && birth_motion_speed >= 0.0, "birth_motion_speed",
           "must be >= 0 [m/s]");
-  require(std::isfinite(birth_motion_fraction) && birth_motion_fraction >= 0.0 && birth_motion_fraction <= 1.0,
-          "birth_motion_fraction", "must be in [0, 1]");
+  require(
+      std::isfinite(birth_motion_fraction) && birth_motion_fraction >= 0.0 && birth_motion_fraction <= 1.0,
+      "birth_motion_fraction", "must be in [0, 1]");
   require(dynamic_threshold > 0.0 && dynamic_threshold <= 1.0, "dynamic_threshold", "must be in (0, 1]");
   require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed",
           "must be >= 0 [m/s]");
@@ -184,7 +185,8 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   previous_mask_.assign(cells, 0);
   bucket_cols_ = (geometry_.width + kBucket - 1) / kBucket;
   bucket_rows_ = (geometry_.height + kBucket - 1) / kBucket;
-  bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1, 0);
+  bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1,
+                       0);
   normalTable();
   reset();
 }
@@ -390,8 +392,8 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   const std::size_t n = p.size();
 
   // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
-  const float inv_information =
-      1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5, 0.5 - config_.sensor_model.p_free));
+  const float inv_information = 1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5,
+                                                                   0.5 - config_.sensor_model.p_free));
   for (std::size_t c = 0; c < cells; ++c)
   {
     const float s = cells_.p_static[c];
@@ -493,8 +495,8 @@ void DynamicGridFilter::findMotionCells(bool first)
   // moved (a static object does not leave a cell that stays in view). Vacated cells are bucketed
   // (counting sort) for the search of motionVelocity().
   const std::size_t cells = geometry_.cellCount();
-  const bool use = !first && have_previous_ && config_.birth_motion_speed > 0.0 &&
-                   config_.birth_motion_fraction > 0.0;
+  const bool use =
+      !first && have_previous_ && config_.birth_motion_speed > 0.0 && config_.birth_motion_fraction > 0.0;
   vacated_.clear();
   if (use)
   {

@@ -39,7 +39,8 @@ double wrapAngle(double angle)
 std::vector<std::pair<std::size_t, Match>> greedyMatch(const std::vector<EvalObject>& ground_truth,
                                                        const std::vector<std::size_t>& gt_indices,
                                                        const std::vector<EvalObject>& detections,
-                                                       std::vector<std::size_t> det_indices, double iou_threshold)
+                                                       std::vector<std::size_t> det_indices,
+                                                       double iou_threshold)
 {
   std::stable_sort(det_indices.begin(), det_indices.end(),
                    [&](std::size_t a, std::size_t b) { return detections[a].score > detections[b].score; });
@@ -209,7 +210,8 @@ ErrorStats errorStats(std::vector<double> values)
   }
   std::sort(values.begin(), values.end());
   stats.mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
-  auto quantile = [&](double q) {
+  auto quantile = [&](double q)
+  {
     const double rank = q * static_cast<double>(values.size() - 1);
     const auto lower = static_cast<std::size_t>(std::floor(rank));
     const std::size_t upper = std::min(lower + 1, values.size() - 1);
@@ -221,8 +223,8 @@ ErrorStats errorStats(std::vector<double> values)
   return stats;
 }
 
-EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections,
-                          const EvaluationConfig& config)
+EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const EvaluationConfig& config)
 {
   config.validate();
   EvaluationResult result;
@@ -236,7 +238,8 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth, const std
     {
       continue;
     }
-    const std::string name = evaluationClass(ground_truth[g].label, ground_truth[g].motion, config.motion_classes);
+    const std::string name =
+        evaluationClass(ground_truth[g].label, ground_truth[g].motion, config.motion_classes);
     gt_of[name].push_back(g);
     if (!ground_truth[g].difficult)
     {
@@ -264,7 +267,8 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth, const std
     const std::vector<std::size_t>& gts = gt_of[name];
     metrics.ground_truth = static_cast<std::size_t>(
         std::count_if(gts.begin(), gts.end(), [&](std::size_t g) { return !ground_truth[g].difficult; }));
-    for (const auto& [d, match] : greedyMatch(ground_truth, gts, detections, det_of[name], config.iou_threshold))
+    for (const auto& [d, match] :
+         greedyMatch(ground_truth, gts, detections, det_of[name], config.iou_threshold))
     {
       (void)d;
       if (match.kind == Match::kIgnored)
@@ -281,16 +285,19 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth, const std
         ++metrics.false_positives;
       }
       const double tp = static_cast<double>(metrics.true_positives);
-      metrics.recall_curve.push_back(metrics.ground_truth > 0 ? tp / static_cast<double>(metrics.ground_truth) : 0.0);
+      metrics.recall_curve.push_back(metrics.ground_truth > 0 ? tp / static_cast<double>(metrics.ground_truth)
+                                                              : 0.0);
       metrics.precision_curve.push_back(tp / static_cast<double>(metrics.detections));
     }
     if (metrics.detections > 0)
     {
-      metrics.precision = static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.detections);
+      metrics.precision =
+          static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.detections);
     }
     if (metrics.ground_truth > 0)
     {
-      metrics.recall = static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.ground_truth);
+      metrics.recall =
+          static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.ground_truth);
       metrics.average_precision = vocAveragePrecision(metrics.recall_curve, metrics.precision_curve);
     }
     if (metrics.precision + metrics.recall > 0.0)
@@ -331,7 +338,8 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth, const std
   std::vector<double> position_errors, speed_errors, heading_errors;
   for (const auto& [label, dets] : det_by_label)
   {
-    for (const auto& [d, match] : greedyMatch(ground_truth, gt_by_label[label], detections, dets, config.iou_threshold))
+    for (const auto& [d, match] :
+         greedyMatch(ground_truth, gt_by_label[label], detections, dets, config.iou_threshold))
     {
       if (match.kind != Match::kTruePositive)
       {

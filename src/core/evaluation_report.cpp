@@ -93,7 +93,10 @@ std::string csvNumber(double value, int decimals)
   return std::isfinite(value) ? number(value, decimals) : "";
 }
 
-std::string percent(double fraction) { return number(100.0 * fraction, 1); }
+std::string percent(double fraction)
+{
+  return number(100.0 * fraction, 1);
+}
 
 void writeFile(const fs::path& path, const std::string& content)
 {
@@ -140,8 +143,8 @@ void axisTicks(cv::Mat& canvas, double x_max, double y_max, int x_decimals, int 
     const int y = kPlotArea.br().y - kPlotArea.height * i / 10;
     cv::putText(canvas, number(x_max * i / 10.0, x_decimals), {x - 12, kPlotArea.br().y + 18},
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1, cv::LINE_AA);
-    cv::putText(canvas, number(y_max * i / 10.0, y_decimals), {20, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1,
-                cv::LINE_AA);
+    cv::putText(canvas, number(y_max * i / 10.0, y_decimals), {20, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                kBlack, 1, cv::LINE_AA);
   }
 }
 
@@ -175,19 +178,20 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
   for (std::size_t i = 0; i < result.classes.size(); ++i)
   {
     const ClassMetrics& m = result.classes[i];
-    out << (i ? "," : "") << "\n    {\"name\": " << jsonString(m.name) << ", \"ground_truth\": " << m.ground_truth
-        << ", \"detections\": " << m.detections << ", \"true_positives\": " << m.true_positives
-        << ", \"false_positives\": " << m.false_positives << ", \"precision\": " << number(m.precision)
-        << ", \"recall\": " << number(m.recall) << ", \"f1\": " << number(m.f1)
-        << ", \"ap\": " << number(m.average_precision) << ",\n     \"recall_curve\": " << jsonArray(m.recall_curve)
+    out << (i ? "," : "") << "\n    {\"name\": " << jsonString(m.name)
+        << ", \"ground_truth\": " << m.ground_truth << ", \"detections\": " << m.detections
+        << ", \"true_positives\": " << m.true_positives << ", \"false_positives\": " << m.false_positives
+        << ", \"precision\": " << number(m.precision) << ", \"recall\": " << number(m.recall)
+        << ", \"f1\": " << number(m.f1) << ", \"ap\": " << number(m.average_precision)
+        << ",\n     \"recall_curve\": " << jsonArray(m.recall_curve)
         << ",\n     \"precision_curve\": " << jsonArray(m.precision_curve) << "}";
   }
   out << "\n  ],\n  \"motion_confusion\": {\"rows\": \"truth\", \"columns\": \"predicted\", "
          "\"labels\": [\"unknown\", \"static\", \"dynamic\"], \"counts\": [";
   for (std::size_t t = 0; t < 3; ++t)
   {
-    out << (t ? ", " : "") << "[" << result.motion_confusion[t][0] << ", " << result.motion_confusion[t][1] << ", "
-        << result.motion_confusion[t][2] << "]";
+    out << (t ? ", " : "") << "[" << result.motion_confusion[t][0] << ", " << result.motion_confusion[t][1]
+        << ", " << result.motion_confusion[t][2] << "]";
   }
   out << "]},\n  \"motion_by_class\": {";
   // Per class: the confusion matrix, and the predicted-motion counts per truth speed band.
@@ -227,8 +231,9 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
       << "| Class | Precision | Recall | F1-score | GT | TP | FP |\n|---|---|---|---|---|---|---|\n";
   for (const auto& m : result.classes)
   {
-    out << "| " << m.name << " | " << percent(m.precision) << " | " << percent(m.recall) << " | " << percent(m.f1)
-        << " | " << m.ground_truth << " | " << m.true_positives << " | " << m.false_positives << " |\n";
+    out << "| " << m.name << " | " << percent(m.precision) << " | " << percent(m.recall) << " | "
+        << percent(m.f1) << " | " << m.ground_truth << " | " << m.true_positives << " | " << m.false_positives
+        << " |\n";
   }
   out << "\n## Table II — average precision (VOC2012 all-point) [%]\n\n| Class | AP |\n|---|---|\n";
   for (const auto& m : result.classes)
@@ -242,12 +247,13 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
       << "| truth \\ predicted | unknown | static | dynamic |\n|---|---|---|---|\n";
   for (std::size_t t = 0; t < 3; ++t)
   {
-    out << "| " << kMotion[t] << " | " << result.motion_confusion[t][0] << " | " << result.motion_confusion[t][1]
-        << " | " << result.motion_confusion[t][2] << " |\n";
+    out << "| " << kMotion[t] << " | " << result.motion_confusion[t][0] << " | "
+        << result.motion_confusion[t][1] << " | " << result.motion_confusion[t][2] << " |\n";
   }
   out << "\n## State errors of matched objects\n\n| quantity | count | median | mean | 90th percentile |\n"
       << "|---|---|---|---|---|\n";
-  auto row = [&](const char* name, const ErrorStats& s, double scale, int decimals) {
+  auto row = [&](const char* name, const ErrorStats& s, double scale, int decimals)
+  {
     out << "| " << name << " | " << s.count << " | " << number(s.median * scale, decimals) << " | "
         << number(s.mean * scale, decimals) << " | " << number(s.p90 * scale, decimals) << " |\n";
   };
@@ -278,8 +284,10 @@ void writeCartuchoFolders(const std::string& dir, const std::vector<EvalObject>&
                           const std::vector<EvalObject>& detections, const EvaluationConfig& config)
 {
   std::map<std::string, std::string> gt_lines, det_lines;
-  auto box = [](const BoundingBox& b) {
-    return number(b.x_min, 2) + " " + number(b.y_min, 2) + " " + number(b.x_max, 2) + " " + number(b.y_max, 2);
+  auto box = [](const BoundingBox& b)
+  {
+    return number(b.x_min, 2) + " " + number(b.y_min, 2) + " " + number(b.x_max, 2) + " " +
+           number(b.y_max, 2);
   };
   for (const auto& o : ground_truth)
   {
@@ -320,7 +328,8 @@ cv::Mat drawPrCurve(const ClassMetrics& metrics)
   cv::Mat canvas = plotCanvas(metrics.name + ": AP = " + number(100.0 * metrics.average_precision, 1) + " %",
                               "recall", "precision");
   axisTicks(canvas, 1.0, 1.0, 1, 1);
-  std::vector<cv::Point> curve{toPixel(0.0, metrics.precision_curve.empty() ? 0.0 : metrics.precision_curve[0], 1, 1)};
+  std::vector<cv::Point> curve{
+      toPixel(0.0, metrics.precision_curve.empty() ? 0.0 : metrics.precision_curve[0], 1, 1)};
   for (std::size_t i = 0; i < metrics.recall_curve.size(); ++i)
   {
     curve.push_back(toPixel(metrics.recall_curve[i], metrics.precision_curve[i], 1.0, 1.0));
@@ -347,7 +356,8 @@ cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const s
   axisTicks(canvas, x_max, y_max, 2, y_max < 10.0 ? 1 : 0);
   if (stats.count == 0)
   {
-    cv::putText(canvas, "no data", {kPlotArea.x + kPlotArea.width / 2 - 40, kPlotArea.y + kPlotArea.height / 2},
+    cv::putText(canvas, "no data",
+                {kPlotArea.x + kPlotArea.width / 2 - 40, kPlotArea.y + kPlotArea.height / 2},
                 cv::FONT_HERSHEY_SIMPLEX, 0.8, kMarkRed, 2, cv::LINE_AA);
   }
   for (int b = 0; b < bins; ++b)
@@ -362,7 +372,8 @@ cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const s
   }
   if (stats.count > 0)
   {
-    for (const auto& [value, name] : {std::make_pair(stats.median, "median"), std::make_pair(stats.p90, "p90")})
+    for (const auto& [value, name] :
+         {std::make_pair(stats.median, "median"), std::make_pair(stats.p90, "p90")})
     {
       const cv::Point bottom = toPixel(value, 0.0, x_max, y_max);
       cv::line(canvas, bottom, {bottom.x, kPlotArea.y}, kMarkRed, 1, cv::LINE_AA);
@@ -373,8 +384,9 @@ cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const s
   return canvas;
 }
 
-void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result, const EvaluationConfig& config,
-                            const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections)
+void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result,
+                            const EvaluationConfig& config, const std::vector<EvalObject>& ground_truth,
+                            const std::vector<EvalObject>& detections)
 {
   const fs::path out(dir);
   std::error_code error;

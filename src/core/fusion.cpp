@@ -13,7 +13,10 @@ namespace
 constexpr double kMaxBandFraction = 10.0;
 constexpr float kBoxTolerancePx = 1.F;
 
-bool isFinite(float value) { return std::isfinite(value); }
+bool isFinite(float value)
+{
+  return std::isfinite(value);
+}
 
 bool validState(std::uint8_t state)
 {
@@ -24,8 +27,8 @@ bool validState(std::uint8_t state)
 /// Whether point i can take part in the fusion at all.
 bool validPoint(const ProjectedPointsView& points, std::size_t i)
 {
-  if (!isFinite(points.u[i]) || !isFinite(points.v[i]) || !isFinite(points.x[i]) ||
-      !isFinite(points.y[i]) || !validState(points.state[i]))
+  if (!isFinite(points.u[i]) || !isFinite(points.v[i]) || !isFinite(points.x[i]) || !isFinite(points.y[i]) ||
+      !validState(points.state[i]))
   {
     return false;
   }
@@ -39,15 +42,17 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
 {
   std::vector<std::size_t> order(detections.size());
   std::iota(order.begin(), order.end(), 0U);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const auto& da = detections[a];
-    const auto& db = detections[b];
-    if (da.box.y_max != db.box.y_max)
-    {
-      return da.box.y_max > db.box.y_max;
-    }
-    return da.score > db.score;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b)
+                   {
+                     const auto& da = detections[a];
+                     const auto& db = detections[b];
+                     if (da.box.y_max != db.box.y_max)
+                     {
+                       return da.box.y_max > db.box.y_max;
+                     }
+                     return da.score > db.score;
+                   });
   return order;
 }
 
@@ -101,8 +106,8 @@ TieRule tieRuleFromString(const std::string& name)
   {
     return TieRule::kUnknown;
   }
-  throw std::invalid_argument("tie_rule must be \"static\", \"dynamic\" or \"unknown\", got \"" +
-                              name + "\"");
+  throw std::invalid_argument("tie_rule must be \"static\", \"dynamic\" or \"unknown\", got \"" + name +
+                              "\"");
 }
 
 std::string toString(TieRule rule)
@@ -135,12 +140,13 @@ std::string toString(Motion motion)
 
 void FusionConfig::validate() const
 {
-  auto check_fraction = [](const char* name, double value) {
+  auto check_fraction = [](const char* name, double value)
+  {
     if (!std::isfinite(value) || value < 0.0 || value > kMaxBandFraction)
     {
       std::ostringstream msg;
-      msg << name << " must be a fraction of the box height in [0, " << kMaxBandFraction
-          << "], got " << value;
+      msg << name << " must be a fraction of the box height in [0, " << kMaxBandFraction << "], got "
+          << value;
       throw std::invalid_argument(msg.str());
     }
   };
@@ -179,7 +185,10 @@ FusionRegion FusionRegion::fromBox(const BoundingBox& box, const FusionConfig& c
   return region;
 }
 
-double FusedObject::speed() const { return std::hypot(vx, vy); }
+double FusedObject::speed() const
+{
+  return std::hypot(vx, vy);
+}
 
 double median(std::vector<double>& values)
 {
@@ -198,8 +207,7 @@ double median(std::vector<double>& values)
   return 0.5 * (lower + upper);
 }
 
-Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points,
-                    const FusionConfig& config)
+Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, const FusionConfig& config)
 {
   Motion motion = Motion::kUnknown;
   if (static_points > dynamic_points)
@@ -280,15 +288,15 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
   return result;
 }
 
-std::string checkFusionInputs(const std::vector<Detection>& detections,
-                              std::uint32_t detections_width, std::uint32_t detections_height,
-                              std::uint32_t points_width, std::uint32_t points_height)
+std::string checkFusionInputs(const std::vector<Detection>& detections, std::uint32_t detections_width,
+                              std::uint32_t detections_height, std::uint32_t points_width,
+                              std::uint32_t points_height)
 {
   std::ostringstream msg;
   if (detections_width != points_width || detections_height != points_height)
   {
-    msg << "image size mismatch: detections are for " << detections_width << "x"
-        << detections_height << ", projected grid for " << points_width << "x" << points_height;
+    msg << "image size mismatch: detections are for " << detections_width << "x" << detections_height
+        << ", projected grid for " << points_width << "x" << points_height;
     return msg.str();
   }
   const float width = static_cast<float>(detections_width);
@@ -296,8 +304,8 @@ std::string checkFusionInputs(const std::vector<Detection>& detections,
   for (std::size_t i = 0; i < detections.size(); ++i)
   {
     const BoundingBox& b = detections[i].box;
-    msg << "detection " << i << " (\"" << detections[i].label << "\") box [" << b.x_min << ", "
-        << b.y_min << ", " << b.x_max << ", " << b.y_max << "] ";
+    msg << "detection " << i << " (\"" << detections[i].label << "\") box [" << b.x_min << ", " << b.y_min
+        << ", " << b.x_max << ", " << b.y_max << "] ";
     if (!isFinite(b.x_min) || !isFinite(b.y_min) || !isFinite(b.x_max) || !isFinite(b.y_max))
     {
       msg << "has a non-finite coordinate";
@@ -308,8 +316,8 @@ std::string checkFusionInputs(const std::vector<Detection>& detections,
       msg << "has x_min > x_max or y_min > y_max";
       return msg.str();
     }
-    if (b.x_min < -kBoxTolerancePx || b.y_min < -kBoxTolerancePx ||
-        b.x_max > width + kBoxTolerancePx || b.y_max > height + kBoxTolerancePx)
+    if (b.x_min < -kBoxTolerancePx || b.y_min < -kBoxTolerancePx || b.x_max > width + kBoxTolerancePx ||
+        b.y_max > height + kBoxTolerancePx)
     {
       msg << "lies outside the " << detections_width << "x" << detections_height << " image";
       return msg.str();

@@ -16,7 +16,10 @@ void require(bool condition, const std::string& message)
   }
 }
 
-bool allFinite(const Eigen::Isometry3d& transform) { return transform.matrix().allFinite(); }
+bool allFinite(const Eigen::Isometry3d& transform)
+{
+  return transform.matrix().allFinite();
+}
 }  // namespace
 
 void GridCellsView::validate() const
@@ -34,7 +37,7 @@ void GridCellsView::validate() const
 
 PinholeCamera::PinholeCamera(const Eigen::Matrix<double, 3, 4>& projection, std::uint32_t width,
                              std::uint32_t height)
-  : projection_(projection), width_(width), height_(height)
+    : projection_(projection), width_(width), height_(height)
 {
   require(projection.allFinite(), "camera projection matrix P holds NaN/Inf");
   require(projection(0, 0) > 0.0 && projection(1, 1) > 0.0,
@@ -44,8 +47,8 @@ PinholeCamera::PinholeCamera(const Eigen::Matrix<double, 3, 4>& projection, std:
   require(projection(2, 0) == 0.0 && projection(2, 1) == 0.0 && projection(2, 2) == 1.0,
           "camera projection matrix P is not that of a rectified pinhole camera: its last row must be "
           "(0, 0, 1, t)");
-  require(width > 0 && height > 0, "camera image size must be > 0, got " + std::to_string(width) + "x" +
-                                       std::to_string(height));
+  require(width > 0 && height > 0,
+          "camera image size must be > 0, got " + std::to_string(width) + "x" + std::to_string(height));
 }
 
 bool PinholeCamera::project(const Eigen::Vector3d& point, Eigen::Vector2d& pixel, double& depth) const
@@ -94,7 +97,8 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
   grid.validate();
   config.validate();
   require(allFinite(geometry.camera_from_grid), "camera ← grid transform holds NaN/Inf");
-  require(std::isfinite(geometry.ground_z), "ground_z must be finite, got " + std::to_string(geometry.ground_z));
+  require(std::isfinite(geometry.ground_z),
+          "ground_z must be finite, got " + std::to_string(geometry.ground_z));
   require(std::isfinite(geometry.time_offset),
           "time offset between image and grid must be finite, got " + std::to_string(geometry.time_offset));
 

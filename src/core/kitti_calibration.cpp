@@ -116,7 +116,10 @@ KittiCalibrationFile KittiCalibrationFile::parse(std::istream& input, const std:
   return file;
 }
 
-bool KittiCalibrationFile::has(const std::string& key) const { return numeric_.count(key) > 0; }
+bool KittiCalibrationFile::has(const std::string& key) const
+{
+  return numeric_.count(key) > 0;
+}
 
 std::vector<double> KittiCalibrationFile::values(const std::string& key, std::size_t count) const
 {
@@ -142,10 +145,13 @@ std::vector<double> KittiCalibrationFile::values(const std::string& key, std::si
 Eigen::Isometry3d rigidTransform(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation,
                                  const std::string& what)
 {
-  const double orthonormality = (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (!(orthonormality < kRotationTolerance) || !(std::abs(rotation.determinant() - 1.0) < kRotationTolerance))
+  const double orthonormality =
+      (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthonormality < kRotationTolerance) ||
+      !(std::abs(rotation.determinant() - 1.0) < kRotationTolerance))
   {
-    throw std::runtime_error(what + " is not a rotation matrix (|R·Rᵀ − I| = " + std::to_string(orthonormality) +
+    throw std::runtime_error(what +
+                             " is not a rotation matrix (|R·Rᵀ − I| = " + std::to_string(orthonormality) +
                              ", det = " + std::to_string(rotation.determinant()) + ")");
   }
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
@@ -157,7 +163,8 @@ Eigen::Isometry3d rigidTransform(const Eigen::Matrix3d& rotation, const Eigen::V
 KittiRawCalibration KittiRawCalibration::readDirectory(const std::string& directory)
 {
   KittiRawCalibration calibration;
-  const KittiCalibrationFile cam_to_cam = KittiCalibrationFile::read(joinPath(directory, "calib_cam_to_cam.txt"));
+  const KittiCalibrationFile cam_to_cam =
+      KittiCalibrationFile::read(joinPath(directory, "calib_cam_to_cam.txt"));
   for (int i = 0; i < 4; ++i)
   {
     const std::string suffix = "_0" + std::to_string(i);
@@ -173,11 +180,13 @@ KittiRawCalibration KittiRawCalibration::readDirectory(const std::string& direct
                                " is not a positive image size");
     }
     calibration.image_size[static_cast<std::size_t>(i)] = {static_cast<std::uint32_t>(std::lround(size[0])),
-                                                          static_cast<std::uint32_t>(std::lround(size[1]))};
+                                                           static_cast<std::uint32_t>(std::lround(size[1]))};
   }
-  const KittiCalibrationFile velo_to_cam = KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt"));
+  const KittiCalibrationFile velo_to_cam =
+      KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt"));
   calibration.cam0_from_velo = rigidFromKeys(velo_to_cam, "R", "T");
-  const KittiCalibrationFile imu_to_velo = KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt"));
+  const KittiCalibrationFile imu_to_velo =
+      KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt"));
   calibration.velo_from_imu = rigidFromKeys(imu_to_velo, "R", "T");
   return calibration;
 }
@@ -207,7 +216,8 @@ KittiObjectCalibration KittiObjectCalibration::read(const std::string& path)
     calibration.p[static_cast<std::size_t>(i)] = file.matrix<3, 4>("P" + std::to_string(i));
   }
   calibration.r0_rect =
-      rigidTransform(file.matrix<3, 3>("R0_rect"), Eigen::Vector3d::Zero(), file.source() + ": R0_rect").linear();
+      rigidTransform(file.matrix<3, 3>("R0_rect"), Eigen::Vector3d::Zero(), file.source() + ": R0_rect")
+          .linear();
   calibration.cam0_from_velo = rigidFromRow34(file, "Tr_velo_to_cam");
   calibration.velo_from_imu = rigidFromRow34(file, "Tr_imu_to_velo");
   return calibration;

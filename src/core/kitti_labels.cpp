@@ -12,9 +12,9 @@ namespace
 {
 constexpr std::size_t kLabelFields = 15;
 
-const char* const kFieldNames[] = {"type",   "truncated", "occluded", "alpha",  "left",  "top",
-                                   "right",  "bottom",    "height",   "width",  "length", "x",
-                                   "y",      "z",         "rotation_y", "score"};
+const char* const kFieldNames[] = {"type",  "truncated", "occluded",   "alpha", "left",   "top",
+                                   "right", "bottom",    "height",     "width", "length", "x",
+                                   "y",     "z",         "rotation_y", "score"};
 
 [[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& what)
 {
@@ -28,8 +28,9 @@ float toFloat(const std::string& token, std::size_t field, const std::string& so
   const double value = std::strtod(token.c_str(), &end);
   if (end == token.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(value))
   {
-    fail(source, line, std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
-                           ") is not a finite number: '" + token + "'");
+    fail(source, line,
+         std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
+             ") is not a finite number: '" + token + "'");
   }
   return static_cast<float>(value);
 }
@@ -41,8 +42,9 @@ int toInt(const std::string& token, std::size_t field, const std::string& source
   const long value = std::strtol(token.c_str(), &end, 10);
   if (end == token.c_str() || *end != '\0' || errno == ERANGE)
   {
-    fail(source, line, std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
-                           ") is not an integer: '" + token + "'");
+    fail(source, line,
+         std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +
+             ") is not an integer: '" + token + "'");
   }
   return static_cast<int>(value);
 }
@@ -77,15 +79,16 @@ std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::s
     {
       fail(source_name, line,
            "expected 15 fields (type truncated occluded alpha left top right bottom h w l x y z ry) "
-           "or 16 with a score, got " + std::to_string(tokens.size()));
+           "or 16 with a score, got " +
+               std::to_string(tokens.size()));
     }
     KittiObjectLabel label;
     label.type = tokens[0];
     label.truncated = toFloat(tokens[1], 1, source_name, line);
     label.occluded = toInt(tokens[2], 2, source_name, line);
-    float* const numbers[] = {&label.alpha,  &label.left,   &label.top, &label.right, &label.bottom,
-                              &label.height, &label.width,  &label.length, &label.x,  &label.y,
-                              &label.z,      &label.rotation_y};
+    float* const numbers[] = {&label.alpha,  &label.left,   &label.top,   &label.right,
+                              &label.bottom, &label.height, &label.width, &label.length,
+                              &label.x,      &label.y,      &label.z,     &label.rotation_y};
     for (std::size_t i = 0; i < 12; ++i)
     {
       *numbers[i] = toFloat(tokens[3 + i], 3 + i, source_name, line);

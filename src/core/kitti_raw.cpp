@@ -48,12 +48,14 @@ OxtsRecord parseOxtsLine(const std::string& line, const std::string& source)
   if (!in.eof() || v.size() != kOxtsFields)
   {
     throw std::runtime_error(source + ": an OXTS record needs " + std::to_string(kOxtsFields) +
-                             " numbers, read " + std::to_string(v.size()) + (in.eof() ? "" : " before a non-number"));
+                             " numbers, read " + std::to_string(v.size()) +
+                             (in.eof() ? "" : " before a non-number"));
   }
   OxtsRecord r;
-  double* doubles[] = {&r.lat, &r.lon, &r.alt, &r.roll, &r.pitch, &r.yaw, &r.vn, &r.ve, &r.vf, &r.vl, &r.vu,
-                       &r.ax,  &r.ay,  &r.az,  &r.af,   &r.al,    &r.au,  &r.wx, &r.wy, &r.wz, &r.wf, &r.wl,
-                       &r.wu,  &r.pos_accuracy, &r.vel_accuracy};
+  double* doubles[] = {&r.lat, &r.lon, &r.alt,          &r.roll,        &r.pitch, &r.yaw, &r.vn,
+                       &r.ve,  &r.vf,  &r.vl,           &r.vu,          &r.ax,    &r.ay,  &r.az,
+                       &r.af,  &r.al,  &r.au,           &r.wx,          &r.wy,    &r.wz,  &r.wf,
+                       &r.wl,  &r.wu,  &r.pos_accuracy, &r.vel_accuracy};
   std::size_t i = 0;
   for (double* field : doubles)
   {
@@ -89,7 +91,10 @@ std::vector<OxtsRecord> readOxtsFolder(const std::string& oxts_dir)
   return records;
 }
 
-double mercatorScale(double lat0_deg) { return std::cos(lat0_deg * M_PI / 180.0); }
+double mercatorScale(double lat0_deg)
+{
+  return std::cos(lat0_deg * M_PI / 180.0);
+}
 
 Eigen::Isometry3d oxtsToMercatorPose(const OxtsRecord& record, double scale)
 {
@@ -127,10 +132,11 @@ KittiStamp parseKittiStamp(const std::string& text, const std::string& source)
   in >> std::get_time(&tm, "%Y-%m-%d %H:%M:%S");
   char dot = 0;
   std::string fraction;
-  if (in.fail() || !(in >> dot) || dot != '.' || !(in >> fraction) || fraction.empty() || fraction.size() > 9 ||
-      fraction.find_first_not_of("0123456789") != std::string::npos)
+  if (in.fail() || !(in >> dot) || dot != '.' || !(in >> fraction) || fraction.empty() ||
+      fraction.size() > 9 || fraction.find_first_not_of("0123456789") != std::string::npos)
   {
-    throw std::runtime_error(source + ": malformed time stamp \"" + text + "\" (want YYYY-MM-DD hh:mm:ss.fffffffff)");
+    throw std::runtime_error(source + ": malformed time stamp \"" + text +
+                             "\" (want YYYY-MM-DD hh:mm:ss.fffffffff)");
   }
   fraction.resize(9, '0');
   KittiStamp stamp;

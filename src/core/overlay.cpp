@@ -38,7 +38,10 @@ cv::Scalar motionColor(Motion motion)
   return kGrey;
 }
 
-cv::Scalar cellStateColor(CellState state) { return state == CellState::kDynamic ? kGreen : kBlue; }
+cv::Scalar cellStateColor(CellState state)
+{
+  return state == CellState::kDynamic ? kGreen : kBlue;
+}
 
 void drawProjectedPoints(cv::Mat& image, const ProjectedPointsView& points, int radius)
 {
@@ -47,16 +50,14 @@ void drawProjectedPoints(cv::Mat& image, const ProjectedPointsView& points, int 
   {
     const float u = points.u[i];
     const float v = points.v[i];
-    if (!std::isfinite(u) || !std::isfinite(v) || u < 0.F || v < 0.F || u >= image.cols ||
-        v >= image.rows)
+    if (!std::isfinite(u) || !std::isfinite(v) || u < 0.F || v < 0.F || u >= image.cols || v >= image.rows)
     {
       continue;
     }
-    const auto state = points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic)
-                           ? CellState::kDynamic
-                           : CellState::kStatic;
-    cv::circle(image, cv::Point(static_cast<int>(u), static_cast<int>(v)), radius,
-               cellStateColor(state), cv::FILLED);
+    const auto state = points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic) ? CellState::kDynamic
+                                                                                         : CellState::kStatic;
+    cv::circle(image, cv::Point(static_cast<int>(u), static_cast<int>(v)), radius, cellStateColor(state),
+               cv::FILLED);
   }
 }
 
@@ -72,9 +73,8 @@ std::string objectLabel(Motion motion, const std::string& label, double speed_mp
   return text;
 }
 
-void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
-                       const FusionResult& result, const ProjectedPointsView& points,
-                       const FusionConfig& config)
+void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections, const FusionResult& result,
+                       const ProjectedPointsView& points, const FusionConfig& config)
 {
   requireBgr(image);
   drawProjectedPoints(image, points);
@@ -90,14 +90,14 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
   {
     const Detection& detection = detections[d];
     const FusionRegion band = FusionRegion::fromBox(detection.box, config);
-    cv::rectangle(image, cv::Point2f(band.u_min, band.v_min), cv::Point2f(band.u_max, band.v_max),
-                  kBandColor, 1);
+    cv::rectangle(image, cv::Point2f(band.u_min, band.v_min), cv::Point2f(band.u_max, band.v_max), kBandColor,
+                  1);
     const FusedObject* object = object_of[d];
     const cv::Scalar color = motionColor(object ? object->motion : Motion::kUnknown);
     const cv::Point2f top_left(detection.box.x_min, detection.box.y_min);
     cv::rectangle(image, top_left, cv::Point2f(detection.box.x_max, detection.box.y_max), color, 2);
-    const std::string text =
-        object ? objectLabel(object->motion, detection.label, object->speed()) : detection.label + " (no grid points)";
+    const std::string text = object ? objectLabel(object->motion, detection.label, object->speed())
+                                    : detection.label + " (no grid points)";
     int baseline = 0;
     const double scale = 0.5;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);

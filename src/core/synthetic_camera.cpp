@@ -47,7 +47,10 @@ cv::Vec3d roadColor(const Eigen::Vector3d& p, const RoadStyle& road)
   return kAsphalt;
 }
 
-double shade(const Eigen::Vector3d& normal) { return 0.35 + 0.65 * std::max(0.0, normal.dot(kLight)); }
+double shade(const Eigen::Vector3d& normal)
+{
+  return 0.35 + 0.65 * std::max(0.0, normal.dot(kLight));
+}
 
 /// Projects a point of the projection frame; w = depth.
 Eigen::Vector3d project(const Eigen::Matrix<double, 3, 4>& p, const Eigen::Vector3d& x)
@@ -80,7 +83,8 @@ ActorInImage projectBox(const GroundBox& box, const Eigen::Isometry3d& world_fro
   double u_min = std::numeric_limits<double>::infinity(), v_min = u_min;
   double u_max = -u_min, v_max = -u_min;
   bool any = false;
-  auto add = [&](const Eigen::Vector3d& x) {
+  auto add = [&](const Eigen::Vector3d& x)
+  {
     const Eigen::Vector3d h = project(camera.projection, x);
     const double u = h.x() / h.z();
     const double v = h.y() / h.z();
@@ -168,7 +172,8 @@ RenderedImage renderCamera(const SceneSnapshot& scene, const std::vector<std::ui
       else if (hit.object >= RayHit::kSceneryBase)
       {
         const auto index = static_cast<std::size_t>(hit.object - RayHit::kSceneryBase);
-        color = toVec(index < scenery_colors_rgb.size() ? scenery_colors_rgb[index] : 0x808080U) * shade(hit.normal);
+        color = toVec(index < scenery_colors_rgb.size() ? scenery_colors_rgb[index] : 0x808080U) *
+                shade(hit.normal);
       }
       else if (hit.hit())
       {

@@ -25,7 +25,8 @@ constexpr double kDifferenceStepS = 0.05;  // central differences for accelerati
 constexpr double kMaxLabelDepthM = 80.0;   // KITTI labels objects up to about this depth
 constexpr double kScanHalfPeriodS = 0.05;  // a 10 Hz revolution around the scan stamp
 const char* const kCameraName = "image_02";
-const char* const kCalibrationFiles[] = {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"};
+const char* const kCalibrationFiles[] = {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt",
+                                         "calib_imu_to_velo.txt"};
 
 std::string indexName(int index, const char* extension)
 {
@@ -54,13 +55,16 @@ void closeChecked(std::ofstream& file, const fs::path& path)
   }
 }
 
-double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+double wrapAngle(double a)
+{
+  return std::atan2(std::sin(a), std::cos(a));
+}
 
 KittiStamp addSeconds(const KittiStamp& base, double seconds)
 {
   constexpr std::int64_t kNsPerS = 1000000000;
-  const std::int64_t total_ns =
-      base.sec * kNsPerS + static_cast<std::int64_t>(base.nsec) + static_cast<std::int64_t>(std::llround(seconds * 1e9));
+  const std::int64_t total_ns = base.sec * kNsPerS + static_cast<std::int64_t>(base.nsec) +
+                                static_cast<std::int64_t>(std::llround(seconds * 1e9));
   const std::int64_t sec = total_ns >= 0 ? total_ns / kNsPerS : -((-total_ns + kNsPerS - 1) / kNsPerS);
   KittiStamp stamp;
   stamp.sec = sec;
@@ -74,8 +78,8 @@ std::string formatStamp(const KittiStamp& stamp)
   std::tm tm{};
   gmtime_r(&seconds, &tm);
   char text[64];
-  std::snprintf(text, sizeof(text), "%04d-%02d-%02d %02d:%02d:%02d.%09u", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
-                tm.tm_hour, tm.tm_min, tm.tm_sec, stamp.nsec);
+  std::snprintf(text, sizeof(text), "%04d-%02d-%02d %02d:%02d:%02d.%09u", tm.tm_year + 1900, tm.tm_mon + 1,
+                tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, stamp.nsec);
   return text;
 }
 
@@ -113,8 +117,8 @@ OxtsRecord oxtsAt(const Trajectory& ego, double t, double imu_height, const Synt
   r.ax = r.af = a.dot(heading);
   r.ay = r.al = a.dot(left);
   r.az = r.au = kGravity;
-  r.wz = r.wu =
-      wrapAngle(ego.poseAt(t + kDifferenceStepS).yaw - ego.poseAt(t - kDifferenceStepS).yaw) / (2.0 * kDifferenceStepS);
+  r.wz = r.wu = wrapAngle(ego.poseAt(t + kDifferenceStepS).yaw - ego.poseAt(t - kDifferenceStepS).yaw) /
+                (2.0 * kDifferenceStepS);
   r.pos_accuracy = 0.05;
   r.vel_accuracy = 0.02;
   r.navstat = 4;
@@ -125,9 +129,9 @@ OxtsRecord oxtsAt(const Trajectory& ego, double t, double imu_height, const Synt
 
 void writeOxtsLine(std::ofstream& out, const OxtsRecord& r)
 {
-  const double values[] = {r.lat, r.lon, r.alt, r.roll, r.pitch, r.yaw, r.vn, r.ve, r.vf, r.vl, r.vu, r.ax, r.ay,
-                           r.az,  r.af,  r.al,  r.au,   r.wx,    r.wy,  r.wz, r.wf, r.wl, r.wu, r.pos_accuracy,
-                           r.vel_accuracy};
+  const double values[] = {r.lat, r.lon, r.alt, r.roll, r.pitch, r.yaw,          r.vn,          r.ve, r.vf,
+                           r.vl,  r.vu,  r.ax,  r.ay,   r.az,    r.af,           r.al,          r.au, r.wx,
+                           r.wy,  r.wz,  r.wf,  r.wl,   r.wu,    r.pos_accuracy, r.vel_accuracy};
   out << std::setprecision(14);
   for (double v : values)
   {
@@ -146,10 +150,11 @@ std::string labelLine(const Actor& actor, const GroundBox& box, const ActorInIma
   const double ry = wrapAngle(std::atan2(-direction.z(), direction.x()));
   const double alpha = wrapAngle(ry - std::atan2(location.x(), location.z()));
   char line[256];
-  std::snprintf(line, sizeof(line), "%s %.2f %d %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f\n",
-                actor.type.c_str(), image.truncation, image.occlusionLevel(), alpha, image.box.x_min, image.box.y_min,
-                image.box.x_max, image.box.y_max, actor.height, actor.width, actor.length, location.x(), location.y(),
-                location.z(), ry);
+  std::snprintf(line, sizeof(line),
+                "%s %.2f %d %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.2f\n",
+                actor.type.c_str(), image.truncation, image.occlusionLevel(), alpha, image.box.x_min,
+                image.box.y_min, image.box.x_max, image.box.y_max, actor.height, actor.width, actor.length,
+                location.x(), location.y(), location.z(), ry);
   return line;
 }
 
@@ -169,7 +174,8 @@ struct TrackletTrack
   std::vector<TrackletSample> samples;
 };
 
-void writeTracklets(const fs::path& path, const std::vector<Actor>& actors, const std::vector<TrackletTrack>& tracks)
+void writeTracklets(const fs::path& path, const std::vector<Actor>& actors,
+                    const std::vector<TrackletTrack>& tracks)
 {
   std::ofstream out = openForWriting(path);
   out << std::setprecision(10);
@@ -180,20 +186,24 @@ void writeTracklets(const fs::path& path, const std::vector<Actor>& actors, cons
   for (std::size_t a = 0; a < actors.size(); ++a)
   {
     out << (a == 0 ? "\t<item class_id=\"1\" tracking_level=\"0\" version=\"1\">\n" : "\t<item>\n");
-    out << "\t\t<objectType>" << actors[a].type << "</objectType>\n\t\t<h>" << actors[a].height << "</h>\n\t\t<w>"
-        << actors[a].width << "</w>\n\t\t<l>" << actors[a].length << "</l>\n\t\t<first_frame>"
-        << std::max(tracks[a].first_frame, 0) << "</first_frame>\n";
-    out << "\t\t<poses class_id=\"2\" tracking_level=\"0\" version=\"0\">\n\t\t\t<count>" << tracks[a].samples.size()
-        << "</count>\n\t\t\t<item_version>2</item_version>\n";
+    out << "\t\t<objectType>" << actors[a].type << "</objectType>\n\t\t<h>" << actors[a].height
+        << "</h>\n\t\t<w>" << actors[a].width << "</w>\n\t\t<l>" << actors[a].length
+        << "</l>\n\t\t<first_frame>" << std::max(tracks[a].first_frame, 0) << "</first_frame>\n";
+    out << "\t\t<poses class_id=\"2\" tracking_level=\"0\" version=\"0\">\n\t\t\t<count>"
+        << tracks[a].samples.size() << "</count>\n\t\t\t<item_version>2</item_version>\n";
     for (std::size_t f = 0; f < tracks[a].samples.size(); ++f)
     {
       const TrackletSample& s = tracks[a].samples[f];
-      out << (a == 0 && f == 0 ? "\t\t\t<item class_id=\"3\" tracking_level=\"0\" version=\"2\">\n" : "\t\t\t<item>\n")
+      out << (a == 0 && f == 0 ? "\t\t\t<item class_id=\"3\" tracking_level=\"0\" version=\"2\">\n"
+                               : "\t\t\t<item>\n")
           << "\t\t\t\t<tx>" << s.bottom_centre_velo.x() << "</tx>\n\t\t\t\t<ty>" << s.bottom_centre_velo.y()
-          << "</ty>\n\t\t\t\t<tz>" << s.bottom_centre_velo.z() << "</tz>\n\t\t\t\t<rx>0</rx>\n\t\t\t\t<ry>0</ry>\n"
-          << "\t\t\t\t<rz>" << s.yaw_velo << "</rz>\n\t\t\t\t<state>2</state>\n\t\t\t\t<occlusion>" << s.occlusion
-          << "</occlusion>\n\t\t\t\t<occlusion_kf>0</occlusion_kf>\n\t\t\t\t<truncation>" << s.truncation
-          << "</truncation>\n\t\t\t\t<amt_occlusion>-1</amt_occlusion>\n\t\t\t\t<amt_occlusion_kf>-1</amt_occlusion_kf>\n"
+          << "</ty>\n\t\t\t\t<tz>" << s.bottom_centre_velo.z()
+          << "</tz>\n\t\t\t\t<rx>0</rx>\n\t\t\t\t<ry>0</ry>\n"
+          << "\t\t\t\t<rz>" << s.yaw_velo << "</rz>\n\t\t\t\t<state>2</state>\n\t\t\t\t<occlusion>"
+          << s.occlusion << "</occlusion>\n\t\t\t\t<occlusion_kf>0</occlusion_kf>\n\t\t\t\t<truncation>"
+          << s.truncation
+          << "</truncation>\n\t\t\t\t<amt_occlusion>-1</amt_occlusion>\n\t\t\t\t<amt_occlusion_kf>-1</"
+             "amt_occlusion_kf>\n"
           << "\t\t\t\t<amt_border_l>-1</amt_border_l>\n\t\t\t\t<amt_border_r>-1</amt_border_r>\n"
           << "\t\t\t\t<amt_border_kf>-1</amt_border_kf>\n\t\t\t</item>\n";
     }
@@ -266,7 +276,8 @@ SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const Kitt
                                            0x5D6D7E, 0xD0D3D4, 0x7D6608, 0x2874A6, 0xA04000};
   const std::vector<OxtsRecord> records = readOxtsFolder((fs::path(drive_dir) / "oxts").string());
   const std::vector<Eigen::Isometry3d> imu_poses = oxtsPosesRelativeToFirst(records);
-  const std::vector<Tracklet> tracklets = readTracklets((fs::path(drive_dir) / "tracklet_labels.xml").string());
+  const std::vector<Tracklet> tracklets =
+      readTracklets((fs::path(drive_dir) / "tracklet_labels.xml").string());
   SyntheticScenario scenario = base;
   const double rate = base.frame_rate_hz;
   scenario.duration_s = static_cast<double>(imu_poses.size()) / rate;
@@ -293,12 +304,14 @@ SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const Kitt
       const std::size_t frame = static_cast<std::size_t>(tracklet.first_frame) + j;
       if (frame >= ego.size())
       {
-        throw std::runtime_error(drive_dir + "/tracklet_labels.xml: tracklet " + std::to_string(k) + " has a pose in frame " +
-                                 std::to_string(frame) + " but oxts/ has only " + std::to_string(ego.size()) + " records");
+        throw std::runtime_error(drive_dir + "/tracklet_labels.xml: tracklet " + std::to_string(k) +
+                                 " has a pose in frame " + std::to_string(frame) + " but oxts/ has only " +
+                                 std::to_string(ego.size()) + " records");
       }
       const TrackletPose& pose = tracklet.poses[j];
       const Eigen::Isometry3d world_from_imu = groundPose(ego[frame], 0.0);
-      const Eigen::Vector3d world = world_from_imu * (imu_from_velo * Eigen::Vector3d(pose.tx, pose.ty, pose.tz));
+      const Eigen::Vector3d world =
+          world_from_imu * (imu_from_velo * Eigen::Vector3d(pose.tx, pose.ty, pose.tz));
       actor_times.push_back(times[frame]);
       actor_poses.push_back({world.x(), world.y(), ego[frame].yaw + pose.rz});
     }
@@ -321,7 +334,8 @@ SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const Kitt
   return scenario;
 }
 
-SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
+SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
+                                          const SyntheticDriveOptions& options,
                                           const std::function<void(int, int)>& progress)
 {
   scenario.validate();
@@ -329,7 +343,8 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
   const KittiRawCalibration calibration = KittiRawCalibration::readDirectory(options.calibration_dir);
 
   std::ostringstream drive_name;
-  drive_name << options.date << "_drive_" << std::setw(4) << std::setfill('0') << options.drive_number << "_sync";
+  drive_name << options.date << "_drive_" << std::setw(4) << std::setfill('0') << options.drive_number
+             << "_sync";
   const fs::path day_dir = fs::path(options.output_root) / options.date;
   const fs::path drive_dir = day_dir / drive_name.str();
   const fs::path image_dir = drive_dir / kCameraName / "data";
@@ -347,7 +362,8 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
   }
   for (const char* file : kCalibrationFiles)
   {
-    fs::copy_file(fs::path(options.calibration_dir) / file, day_dir / file, fs::copy_options::overwrite_existing, error);
+    fs::copy_file(fs::path(options.calibration_dir) / file, day_dir / file,
+                  fs::copy_options::overwrite_existing, error);
     if (error)
     {
       throw std::runtime_error("cannot copy " + (fs::path(options.calibration_dir) / file).string() + " to " +
@@ -375,7 +391,8 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
     scenery_colors.push_back(box.color_rgb);
   }
 
-  const int frames = options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
+  const int frames =
+      options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
   const KittiStamp start = parseKittiStamp(options.start_time, "start_time");
   const fs::path image_stamps_path = drive_dir / kCameraName / "timestamps.txt";
   const fs::path velo_stamps_path = drive_dir / "velodyne_points" / "timestamps.txt";
@@ -408,20 +425,23 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
     const Eigen::Isometry3d velo_from_world = world_from_velo.inverse();
     const Eigen::Isometry3d rect_from_world = world_from_rect.inverse();
     SceneSnapshot scene(scenario.actors, scenario.scenery, t);
-    scene.cullBeyond(world_from_velo.translation().head<2>(), std::max(scenario.lidar.max_range, camera.far_m));
+    scene.cullBeyond(world_from_velo.translation().head<2>(),
+                     std::max(scenario.lidar.max_range, camera.far_m));
 
     // Lidar scan.
     const std::vector<LidarPoint> scan = simulateLidarScan(scene, world_from_velo, scenario.lidar, rng);
     {
       const fs::path path = velo_dir / indexName(frame, ".bin");
       std::ofstream out(path, std::ios::binary);
-      out.write(reinterpret_cast<const char*>(scan.data()), static_cast<std::streamsize>(scan.size() * sizeof(LidarPoint)));
+      out.write(reinterpret_cast<const char*>(scan.data()),
+                static_cast<std::streamsize>(scan.size() * sizeof(LidarPoint)));
       closeChecked(out, path);
       summary.lidar_points += scan.size();
     }
 
     // Camera image and labels.
-    const RenderedImage image = renderCamera(scene, actor_colors, scenery_colors, world_from_rect, camera, scenario.road);
+    const RenderedImage image =
+        renderCamera(scene, actor_colors, scenery_colors, world_from_rect, camera, scenario.road);
     const fs::path image_path = image_dir / indexName(frame, ".png");
     if (!cv::imwrite(image_path.string(), image.bgr))
     {
@@ -445,8 +465,8 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, con
       }
       TrackletSample sample;
       sample.bottom_centre_velo = velo_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
-      const Eigen::Vector3d heading = velo_from_world.linear() *
-                                      Eigen::Vector3d(std::cos(box.pose.yaw), std::sin(box.pose.yaw), 0.0);
+      const Eigen::Vector3d heading =
+          velo_from_world.linear() * Eigen::Vector3d(std::cos(box.pose.yaw), std::sin(box.pose.yaw), 0.0);
       sample.yaw_velo = std::atan2(heading.y(), heading.x());
       sample.occlusion = std::min(seen.occlusionLevel(), 2);
       sample.truncation = !seen.in_view ? 2 : seen.truncation > 0.05 ? 1 : 0;

@@ -125,7 +125,8 @@ std::uint32_t colorOr(const YAML::Node& node, const std::string& where, std::uin
   }
 }
 
-void parseSize(const YAML::Node& node, const std::string& where, double& length, double& width, double& height)
+void parseSize(const YAML::Node& node, const std::string& where, double& length, double& width,
+               double& height)
 {
   const auto size = get<std::vector<double>>(node, "size", where);
   if (size.size() != 3 || size[0] <= 0.0 || size[1] <= 0.0 || size[2] <= 0.0)
@@ -138,7 +139,10 @@ void parseSize(const YAML::Node& node, const std::string& where, double& length,
 }
 }  // namespace
 
-int SyntheticScenario::frameCount() const { return static_cast<int>(std::lround(duration_s * frame_rate_hz)); }
+int SyntheticScenario::frameCount() const
+{
+  return static_cast<int>(std::lround(duration_s * frame_rate_hz));
+}
 
 void SyntheticScenario::validate() const
 {

@@ -47,7 +47,8 @@ Trajectory Trajectory::waypoints(const std::vector<Eigen::Vector3d>& t_x_y, doub
   {
     if (!(t_x_y[i].x() > t_x_y[i - 1].x()))
     {
-      throw std::invalid_argument("waypoint times must increase strictly (waypoint " + std::to_string(i) + ")");
+      throw std::invalid_argument("waypoint times must increase strictly (waypoint " + std::to_string(i) +
+                                  ")");
     }
   }
   Trajectory trajectory;
@@ -118,7 +119,10 @@ Trajectory Trajectory::posed(const std::vector<double>& times, const std::vector
   return trajectory;
 }
 
-Trajectory Trajectory::parked(const Pose2D& pose) { return waypoints({Eigen::Vector3d(0.0, pose.x, pose.y)}, pose.yaw); }
+Trajectory Trajectory::parked(const Pose2D& pose)
+{
+  return waypoints({Eigen::Vector3d(0.0, pose.x, pose.y)}, pose.yaw);
+}
 
 Pose2D Trajectory::poseAt(double t) const
 {
@@ -148,7 +152,8 @@ Pose2D Trajectory::poseAt(double t) const
   {
     return {w.back().y(), w.back().z(), waypoint_yaw_.empty() ? segment_yaw_.back() : waypoint_yaw_.back()};
   }
-  const auto next = std::upper_bound(w.begin(), w.end(), t, [](double time, const Eigen::Vector3d& p) { return time < p.x(); });
+  const auto next = std::upper_bound(w.begin(), w.end(), t,
+                                     [](double time, const Eigen::Vector3d& p) { return time < p.x(); });
   const std::size_t i = static_cast<std::size_t>(next - w.begin()) - 1;
   const double s = (t - w[i].x()) / (w[i + 1].x() - w[i].x());
   const Eigen::Vector2d p = (1.0 - s) * w[i].tail<2>() + s * w[i + 1].tail<2>();
@@ -172,7 +177,8 @@ Eigen::Vector2d Trajectory::velocityAt(double t) const
   {
     return Eigen::Vector2d::Zero();
   }
-  const auto next = std::upper_bound(w.begin(), w.end(), t, [](double time, const Eigen::Vector3d& p) { return time < p.x(); });
+  const auto next = std::upper_bound(w.begin(), w.end(), t,
+                                     [](double time, const Eigen::Vector3d& p) { return time < p.x(); });
   const std::size_t i = static_cast<std::size_t>(next - w.begin()) - 1;
   return (w[i + 1].tail<2>() - w[i].tail<2>()) / (w[i + 1].x() - w[i].x());
 }
@@ -213,7 +219,8 @@ RayHit intersectBox(const GroundBox& box, const Eigen::Vector3d& origin, const E
   const Eigen::Vector3d rel = origin - Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
   // Into the box frame: rotate by −yaw.
   const Eigen::Vector3d o(c * rel.x() + s * rel.y(), -s * rel.x() + c * rel.y(), rel.z());
-  const Eigen::Vector3d d(c * direction.x() + s * direction.y(), -s * direction.x() + c * direction.y(), direction.z());
+  const Eigen::Vector3d d(c * direction.x() + s * direction.y(), -s * direction.x() + c * direction.y(),
+                          direction.z());
   const double lo[3] = {-box.length / 2.0, -box.width / 2.0, 0.0};
   const double hi[3] = {box.length / 2.0, box.width / 2.0, box.height};
   double t_enter = -std::numeric_limits<double>::infinity();
@@ -255,12 +262,13 @@ RayHit intersectBox(const GroundBox& box, const Eigen::Vector3d& origin, const E
   hit.object = 0;
   Eigen::Vector3d local_normal = Eigen::Vector3d::Zero();
   local_normal[enter_axis] = enter_sign;
-  hit.normal = Eigen::Vector3d(c * local_normal.x() - s * local_normal.y(), s * local_normal.x() + c * local_normal.y(),
-                               local_normal.z());
+  hit.normal = Eigen::Vector3d(c * local_normal.x() - s * local_normal.y(),
+                               s * local_normal.x() + c * local_normal.y(), local_normal.z());
   return hit;
 }
 
-SceneSnapshot::SceneSnapshot(const std::vector<Actor>& actors, const std::vector<SceneryBox>& scenery, double t)
+SceneSnapshot::SceneSnapshot(const std::vector<Actor>& actors, const std::vector<SceneryBox>& scenery,
+                             double t)
 {
   for (const auto& actor : actors)
   {
@@ -323,12 +331,14 @@ RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   return best;
 }
 
-void SceneSnapshot::actorsAlong(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double min_range,
-                                double max_range, std::vector<int>& actors) const
+void SceneSnapshot::actorsAlong(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                double min_range, double max_range, std::vector<int>& actors) const
 {
   for (std::size_t i = 0; i < actor_boxes_.size(); ++i)
   {
-    if (actor_active_[i] && !culled_[i] && mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range, max_range) &&
+    if (actor_active_[i] && !culled_[i] &&
+        mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range,
+               max_range) &&
         intersectBox(actor_boxes_[i], origin, direction, min_range).range <= max_range)
     {
       actors.push_back(static_cast<int>(i));
@@ -374,7 +384,8 @@ std::vector<LidarPoint> simulateLidarScan(const SceneSnapshot& scene, const Eige
                                           const LidarConfig& config, std::mt19937& rng)
 {
   config.validate();
-  const std::vector<double> elevations = config.elevations.empty() ? LidarConfig::hdl64Elevations() : config.elevations;
+  const std::vector<double> elevations =
+      config.elevations.empty() ? LidarConfig::hdl64Elevations() : config.elevations;
   std::normal_distribution<double> noise(0.0, config.range_noise_std);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const Eigen::Matrix3d rotation = sensor_pose.linear();

@@ -17,7 +17,8 @@ constexpr int kMaxInputSize = 4096;
 
 bool endsWith(const std::string& text, const std::string& suffix)
 {
-  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 std::string trim(const std::string& text)
@@ -103,7 +104,8 @@ std::vector<CfgSection> readCfgSections(const std::string& path)
     {
       if (content.back() != ']')
       {
-        throw YoloModelError(path + ":" + std::to_string(line) + ": malformed section header '" + content + "'");
+        throw YoloModelError(path + ":" + std::to_string(line) + ": malformed section header '" + content +
+                             "'");
       }
       sections.push_back({content.substr(1, content.size() - 2), line, {}});
       continue;
@@ -197,11 +199,13 @@ void YoloDetectorConfig::validate() const
   const bool onnx = endsWith(model_path, ".onnx");
   if (!darknet && !onnx)
   {
-    throw std::invalid_argument("model_path must name a Darknet .cfg or an .onnx file, got \"" + model_path + "\"");
+    throw std::invalid_argument("model_path must name a Darknet .cfg or an .onnx file, got \"" + model_path +
+                                "\"");
   }
   if (darknet && weights_path.empty())
   {
-    throw std::invalid_argument("weights_path must name the .weights file of the Darknet model " + model_path);
+    throw std::invalid_argument("weights_path must name the .weights file of the Darknet model " +
+                                model_path);
   }
   if (onnx && !weights_path.empty())
   {
@@ -234,20 +238,21 @@ void YoloDetectorConfig::validate() const
   }
   if (backendId(backend) < 0)
   {
-    throw std::invalid_argument("backend must be \"opencv\", \"cuda\" or \"inference_engine\", got \"" + backend +
-                                "\"");
+    throw std::invalid_argument("backend must be \"opencv\", \"cuda\" or \"inference_engine\", got \"" +
+                                backend + "\"");
   }
   if (targetId(target) < 0)
   {
     throw std::invalid_argument(
-        "target must be \"cpu\", \"opencl\", \"opencl_fp16\", \"cuda\" or \"cuda_fp16\", got \"" + target + "\"");
+        "target must be \"cpu\", \"opencl\", \"opencl_fp16\", \"cuda\" or \"cuda_fp16\", got \"" + target +
+        "\"");
   }
   for (const auto& entry : class_map)
   {
     if (entry.first.empty() || entry.second.empty())
     {
-      throw std::invalid_argument("class_map entries must have non-empty names, got \"" + entry.first + "\" -> \"" +
-                                  entry.second + "\"");
+      throw std::invalid_argument("class_map entries must have non-empty names, got \"" + entry.first +
+                                  "\" -> \"" + entry.second + "\"");
     }
   }
 }
@@ -277,11 +282,13 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
     const CfgSection& s = sections[i];
     const std::string where = cfg_path + ":" + std::to_string(s.line) + ": [" + s.name + "] ";
     const int index = static_cast<int>(shapes.size());
-    auto layerAt = [&](int reference) -> const LayerShape& {
+    auto layerAt = [&](int reference) -> const LayerShape&
+    {
       const int absolute = reference < 0 ? index + reference : reference;
       if (absolute < 0 || absolute >= index)
       {
-        throw YoloModelError(where + "refers to layer " + std::to_string(reference) + ", which does not exist");
+        throw YoloModelError(where + "refers to layer " + std::to_string(reference) +
+                             ", which does not exist");
       }
       return shapes[static_cast<std::size_t>(absolute)];
     };
@@ -316,7 +323,8 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
       const int outputs = cfgInt(s, "output", 1, cfg_path);
       const bool batch_normalize = cfgInt(s, "batch_normalize", 0, cfg_path) != 0;
       const std::size_t inputs = static_cast<std::size_t>(previous.channels) *
-                                 static_cast<std::size_t>(previous.height) * static_cast<std::size_t>(previous.width);
+                                 static_cast<std::size_t>(previous.height) *
+                                 static_cast<std::size_t>(previous.width);
       info.blocks.push_back({outputs, static_cast<std::size_t>(outputs) * inputs, batch_normalize});
       info.parameters += static_cast<std::size_t>(outputs) * (inputs + (batch_normalize ? 4 : 1));
       out = {outputs, 1, 1};
@@ -427,16 +435,17 @@ std::size_t checkDarknetWeights(const std::string& weights_path, const std::stri
                          " bytes, shorter than its header");
   }
   // As Darknet and OpenCV's importer: `seen` is 64 bits from version 0.2 on, 32 bits before.
-  const std::size_t header = 3 * sizeof(std::int32_t) +
-                             ((version[0] * 10 + version[1]) >= 2 ? sizeof(std::int64_t) : sizeof(std::int32_t));
+  const std::size_t header =
+      3 * sizeof(std::int32_t) +
+      ((version[0] * 10 + version[1]) >= 2 ? sizeof(std::int64_t) : sizeof(std::int32_t));
   const std::size_t expected = header + sizeof(float) * info.parameters;
   const auto actual = static_cast<std::size_t>(file_size);
   if (actual != expected)
   {
     throw YoloModelError(weights_path + ": " + (actual < expected ? "truncated" : "too long for its cfg") +
-                         " Darknet weights file: " + std::to_string(actual) + " bytes, but " + cfg_path + " needs " +
-                         std::to_string(expected) + " (" + std::to_string(header) + "-byte header + " +
-                         std::to_string(info.parameters) + " float32 parameters)");
+                         " Darknet weights file: " + std::to_string(actual) + " bytes, but " + cfg_path +
+                         " needs " + std::to_string(expected) + " (" + std::to_string(header) +
+                         "-byte header + " + std::to_string(info.parameters) + " float32 parameters)");
   }
   return expected;
 }
@@ -482,8 +491,10 @@ InputTransform InputTransform::make(cv::Size image_size, cv::Size input_size, Re
   {
     const double scale = std::min(static_cast<double>(input_size.width) / image_size.width,
                                   static_cast<double>(input_size.height) / image_size.height);
-    t.resized_width = std::clamp(static_cast<int>(std::lround(image_size.width * scale)), 1, input_size.width);
-    t.resized_height = std::clamp(static_cast<int>(std::lround(image_size.height * scale)), 1, input_size.height);
+    t.resized_width =
+        std::clamp(static_cast<int>(std::lround(image_size.width * scale)), 1, input_size.width);
+    t.resized_height =
+        std::clamp(static_cast<int>(std::lround(image_size.height * scale)), 1, input_size.height);
     t.pad_x = (input_size.width - t.resized_width) / 2;
     t.pad_y = (input_size.height - t.resized_height) / 2;
   }
@@ -494,7 +505,8 @@ InputTransform InputTransform::make(cv::Size image_size, cv::Size input_size, Re
 
 BoundingBox InputTransform::toImage(double x_min, double y_min, double x_max, double y_max) const
 {
-  auto clip = [](double value, int limit) { return static_cast<float>(std::clamp(value, 0.0, double(limit))); };
+  auto clip = [](double value, int limit)
+  { return static_cast<float>(std::clamp(value, 0.0, double(limit))); };
   BoundingBox box;
   box.x_min = clip((x_min - pad_x) / scale_x, image_size.width);
   box.x_max = clip((x_max - pad_x) / scale_x, image_size.width);
@@ -550,8 +562,8 @@ std::vector<YoloCandidate> decodeYoloOutputs(const std::vector<cv::Mat>& outputs
   return candidates;
 }
 
-std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& candidates, double score_threshold,
-                                            double nms_threshold)
+std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& candidates,
+                                            double score_threshold, double nms_threshold)
 {
   std::map<int, std::vector<std::size_t>> by_class;
   for (std::size_t i = 0; i < candidates.size(); ++i)
@@ -569,7 +581,8 @@ std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& ca
       scores.push_back(candidates[i].score);
     }
     std::vector<int> indices;
-    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(score_threshold), static_cast<float>(nms_threshold), indices);
+    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(score_threshold), static_cast<float>(nms_threshold),
+                      indices);
     for (int index : indices)
     {
       kept.push_back(candidates[entry.second[static_cast<std::size_t>(index)]]);
@@ -595,8 +608,8 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
       if (info.num_classes != static_cast<int>(class_names_.size()))
       {
         throw YoloModelError(config_.class_names_path + ": lists " + std::to_string(class_names_.size()) +
-                             " classes, but " + config_.model_path + " has classes=" +
-                             std::to_string(info.num_classes));
+                             " classes, but " + config_.model_path +
+                             " has classes=" + std::to_string(info.num_classes));
       }
       checkDarknetWeights(config_.weights_path, config_.model_path, info);
       input_size_ = config_.input_width > 0 ? cv::Size(config_.input_width, config_.input_height)
@@ -653,8 +666,9 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
         net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
         continue;
       }
-      throw YoloModelError(config_.model_path + ": forward pass at input " + std::to_string(input_size_.width) + "x" +
-                           std::to_string(input_size_.height) + " failed: " + e.what());
+      throw YoloModelError(config_.model_path + ": forward pass at input " +
+                           std::to_string(input_size_.width) + "x" + std::to_string(input_size_.height) +
+                           " failed: " + e.what());
     }
   }
   for (const cv::Mat& output : outputs)
@@ -673,7 +687,8 @@ void YoloDetector::selectBackend()
 {
   const int backend = backendId(config_.backend);
   const int target = targetId(config_.target);
-  const std::vector<cv::dnn::Target> available = cv::dnn::getAvailableTargets(static_cast<cv::dnn::Backend>(backend));
+  const std::vector<cv::dnn::Target> available =
+      cv::dnn::getAvailableTargets(static_cast<cv::dnn::Backend>(backend));
   if (std::find(available.begin(), available.end(), target) == available.end())
   {
     warnings_.push_back("DNN backend/target " + config_.backend + "/" + config_.target +
@@ -718,8 +733,9 @@ cv::Mat YoloDetector::makeInputBlob(const cv::Mat& image, PixelFormat format, In
   const int expected_type = format == PixelFormat::kMono8 ? CV_8UC1 : CV_8UC3;
   if (image.type() != expected_type)
   {
-    throw std::invalid_argument(std::string("detect: image of OpenCV type ") + cv::typeToString(image.type()) +
-                                " does not match its pixel format (expected " + cv::typeToString(expected_type) + ")");
+    throw std::invalid_argument(
+        std::string("detect: image of OpenCV type ") + cv::typeToString(image.type()) +
+        " does not match its pixel format (expected " + cv::typeToString(expected_type) + ")");
   }
   cv::Mat three_channel = image;
   bool image_rgb = format == PixelFormat::kRgb8;
@@ -787,7 +803,8 @@ void drawDetections(cv::Mat& image, const std::vector<Detection>& detections)
   for (const Detection& d : detections)
   {
     const cv::Scalar colour = kPalette[d.class_id % (sizeof(kPalette) / sizeof(kPalette[0]))];
-    const cv::Point top_left(static_cast<int>(std::lround(d.box.x_min)), static_cast<int>(std::lround(d.box.y_min)));
+    const cv::Point top_left(static_cast<int>(std::lround(d.box.x_min)),
+                             static_cast<int>(std::lround(d.box.y_min)));
     const cv::Point bottom_right(static_cast<int>(std::lround(d.box.x_max)),
                                  static_cast<int>(std::lround(d.box.y_max)));
     cv::rectangle(image, top_left, bottom_right, colour, 2);
@@ -796,8 +813,8 @@ void drawDetections(cv::Mat& image, const std::vector<Detection>& detections)
     int baseline = 0;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.5, 1, &baseline);
     const cv::Point origin(top_left.x, std::max(size.height + 2, top_left.y - 3));
-    cv::rectangle(image, origin + cv::Point(0, baseline), origin + cv::Point(size.width, -size.height - 2), colour,
-                  cv::FILLED);
+    cv::rectangle(image, origin + cv::Point(0, baseline), origin + cv::Point(size.width, -size.height - 2),
+                  colour, cv::FILLED);
     cv::putText(image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
 }

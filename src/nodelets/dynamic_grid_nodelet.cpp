@@ -217,7 +217,8 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   Eigen::Isometry3d world_from_sensor;
   try
   {
-    world_from_sensor = scanPose(*tf_buffer_, fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp);
+    world_from_sensor =
+        scanPose(*tf_buffer_, fixed_frame_, cloud_msg->header.frame_id, cloud_msg->header.stamp);
   }
   catch (const tf2::TransformException& e)
   {

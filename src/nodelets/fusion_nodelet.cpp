@@ -1,7 +1,4 @@
 // grid_vision_fusion/fusion: detector boxes + projected grid -> DetectedObjectArray.
-#include <boost/make_shared.hpp>
-#include <boost/thread/lock_guard.hpp>
-#include <boost/thread/mutex.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
@@ -10,17 +7,20 @@
 #include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
 #include <visualization_msgs/MarkerArray.h>
+#include <boost/make_shared.hpp>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <deque>
 #include <memory>
 #include <mutex>
 
-#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/FusionReconfigureConfig.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/core/fusion.h"
@@ -39,14 +39,12 @@ constexpr double kThrottleS = 5.0;
 class FusionNodelet : public nodelet::Nodelet
 {
   using ExactPolicy = message_filters::sync_policies::ExactTime<Detection2DArray, ProjectedGrid>;
-  using ApproximatePolicy =
-      message_filters::sync_policies::ApproximateTime<Detection2DArray, ProjectedGrid>;
+  using ApproximatePolicy = message_filters::sync_policies::ApproximateTime<Detection2DArray, ProjectedGrid>;
   using ReconfigureServer = dynamic_reconfigure::Server<FusionReconfigureConfig>;
 
   void onInit() override;
   void connectCb();
-  void fusionCb(const Detection2DArray::ConstPtr& detections_msg,
-                const ProjectedGrid::ConstPtr& grid_msg);
+  void fusionCb(const Detection2DArray::ConstPtr& detections_msg, const ProjectedGrid::ConstPtr& grid_msg);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
   void reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t level);
   void publishOverlay(const Detection2DArray& detections_msg, const std::vector<Detection>& detections,
@@ -117,8 +115,8 @@ void FusionNodelet::onInit()
   }
   else
   {
-    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
-        ExactPolicy(queue_size_), sub_detections_, sub_grid_);
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(queue_size_),
+                                                                               sub_detections_, sub_grid_);
     exact_sync_->registerCallback(
         boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
   }
@@ -138,11 +136,11 @@ void FusionNodelet::onInit()
     sub_image_ = it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
-  NODELET_INFO("fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, "
-               "%s sync, %s",
-               config_.band_above, config_.band_below, config_.min_points,
-               toString(config_.tie_rule).c_str(), approximate_sync ? "approximate" : "exact",
-               lazy_ ? "lazy" : "always subscribed");
+  NODELET_INFO(
+      "fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, "
+      "%s sync, %s",
+      config_.band_above, config_.band_below, config_.min_points, toString(config_.tie_rule).c_str(),
+      approximate_sync ? "approximate" : "exact", lazy_ ? "lazy" : "always subscribed");
 }
 
 void FusionNodelet::connectCb()
@@ -174,9 +172,9 @@ void FusionNodelet::connectCb()
   }
   else if (!sub_image_)
   {
-    sub_image_ = it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
-                                image_transport::TransportHints("raw", ros::TransportHints(),
-                                                                getPrivateNodeHandle()));
+    sub_image_ =
+        it_->subscribe("image", 2, &FusionNodelet::imageCb, this,
+                       image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
   }
 }
 

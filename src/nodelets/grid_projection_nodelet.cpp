@@ -2,12 +2,9 @@
 // camera_info, stamped like the image. Each camera_info waits (without blocking) in a
 // tf2_ros::MessageFilter until the tf of its stamp is there: a camera_info that arrives before
 // the /tf of the same stamp is projected as soon as that tf comes in.
-#include <boost/thread/lock_guard.hpp>
-#include <boost/thread/mutex.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/image_encodings.h>
@@ -15,6 +12,9 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <deque>
 #include <memory>
@@ -105,13 +105,15 @@ void GridProjectionNodelet::onInit()
   // camera_info is handed to the filter before that.
   tf_filter_ = std::make_unique<TfFilter>(*tf_buffer_, "", static_cast<std::uint32_t>(queue_size_), nh);
   tf_filter_->setTargetFrames({});
-  tf_filter_->registerCallback(boost::bind(&GridProjectionNodelet::cameraInfoCb, this, boost::placeholders::_1));
-  tf_filter_->registerFailureCallback(
-      boost::bind(&GridProjectionNodelet::tfFailureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+  tf_filter_->registerCallback(
+      boost::bind(&GridProjectionNodelet::cameraInfoCb, this, boost::placeholders::_1));
+  tf_filter_->registerFailureCallback(boost::bind(&GridProjectionNodelet::tfFailureCb, this,
+                                                  boost::placeholders::_1, boost::placeholders::_2));
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
-  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb =
+      boost::bind(&GridProjectionNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("projected_grid/image", 1, image_connect_cb, image_connect_cb);
@@ -124,12 +126,14 @@ void GridProjectionNodelet::onInit()
     sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
-  NODELET_INFO("grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
-               "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
-               config_.occupied_threshold, config_.dynamic_ratio, options_.ground_height,
-               options_.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
-               options_.ground_frame.c_str(), config_.column_mode ? "column mode" : "ground points only",
-               config_.predict_to_image_stamp ? "on" : "off", options_.max_grid_age, options_.lazy ? "lazy" : "always subscribed");
+  NODELET_INFO(
+      "grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
+      "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
+      config_.occupied_threshold, config_.dynamic_ratio, options_.ground_height,
+      options_.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
+      options_.ground_frame.c_str(), config_.column_mode ? "column mode" : "ground points only",
+      config_.predict_to_image_stamp ? "on" : "off", options_.max_grid_age,
+      options_.lazy ? "lazy" : "always subscribed");
 }
 
 void GridProjectionNodelet::connectCb()
@@ -165,8 +169,9 @@ void GridProjectionNodelet::connectCb()
   }
   else if (!sub_image_)
   {
-    sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
-                                image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+    sub_image_ =
+        it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
+                       image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
   }
 }
 
@@ -182,9 +187,9 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
   std::lock_guard<std::mutex> lock(grid_mutex_);
   if (grid_ && grid_msg->header.stamp < grid_->header.stamp)
   {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: time jumped backwards on %s (%.3f after %.3f): grid replaced",
-                          sub_grid_.getTopic().c_str(), grid_msg->header.stamp.toSec(),
-                          grid_->header.stamp.toSec());
+    NODELET_WARN_THROTTLE(
+        kThrottleS, "grid_projection: time jumped backwards on %s (%.3f after %.3f): grid replaced",
+        sub_grid_.getTopic().c_str(), grid_msg->header.stamp.toSec(), grid_->header.stamp.toSec());
   }
   grid_ = grid_msg;
   if (grid_msg->header.frame_id != tf_target_frame_)
@@ -205,7 +210,8 @@ void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstP
     std::lock_guard<std::mutex> lock(grid_mutex_);
     if (!grid_)
     {
-      NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
+      NODELET_WARN_THROTTLE(kThrottleS,
+                            "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
                             info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
       return;
     }
@@ -218,15 +224,17 @@ void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstP
 void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg,
                                         tf2_ros::FilterFailureReason reason)
 {
-  const char* why =
-      reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the camera_info has an empty frame_id"
-      : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "its stamp is older than the tf buffer"
-                                                              : "its tf did not arrive within ~queue_size camera_infos";
-  NODELET_WARN_THROTTLE(kThrottleS,
-                        "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
-                        "(%s), nothing published",
-                        sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(),
-                        info_msg->header.frame_id.c_str(), tf_filter_->getTargetFramesString().c_str(), why);
+  const char* why = reason == tf2_ros::filter_failure_reasons::EmptyFrameID
+                        ? "the camera_info has an empty frame_id"
+                    : reason == tf2_ros::filter_failure_reasons::OutTheBack
+                        ? "its stamp is older than the tf buffer"
+                        : "its tf did not arrive within ~queue_size camera_infos";
+  NODELET_WARN_THROTTLE(
+      kThrottleS,
+      "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
+      "(%s), nothing published",
+      sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), info_msg->header.frame_id.c_str(),
+      tf_filter_->getTargetFramesString().c_str(), why);
 }
 
 void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
@@ -250,15 +258,17 @@ void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr
   }
   catch (const ProjectionSkipped& e)
   {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info of %s at t=%.3f with the grid of %s: %s; nothing "
+    NODELET_WARN_THROTTLE(kThrottleS,
+                          "grid_projection: camera_info of %s at t=%.3f with the grid of %s: %s; nothing "
                           "published",
-                          sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(),
-                          e.what());
+                          sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(),
+                          sub_grid_.getTopic().c_str(), e.what());
     return;
   }
   if (invalid_cells > 0)
   {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: %zu cells of the grid on %s skipped (NaN/Inf probability or "
+    NODELET_WARN_THROTTLE(kThrottleS,
+                          "grid_projection: %zu cells of the grid on %s skipped (NaN/Inf probability or "
                           "velocity)",
                           invalid_cells, sub_grid_.getTopic().c_str());
   }

@@ -1,17 +1,17 @@
 // grid_vision_fusion/yolo_detector: image → Detection2DArray, by a YOLO network on OpenCV DNN
 // (backend "opencv_dnn") or from per-frame KITTI label files (backend "replay").
-#include <boost/make_shared.hpp>
-#include <boost/thread/lock_guard.hpp>
-#include <boost/thread/mutex.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/callback_queue_interface.h>
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
+#include <boost/make_shared.hpp>
+#include <boost/thread/lock_guard.hpp>
+#include <boost/thread/mutex.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <chrono>
 #include <functional>
@@ -147,7 +147,8 @@ void YoloDetectorNodelet::onInit()
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s", e.what());
+    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s",
+                  e.what());
     return;
   }
   if (detector_)
@@ -159,18 +160,20 @@ void YoloDetectorNodelet::onInit()
   }
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  updater_->setHardwareID(replay_backend_ ? "replay " + replay_->config().directory : detector_->config().model_path);
+  updater_->setHardwareID(replay_backend_ ? "replay " + replay_->config().directory
+                                          : detector_->config().model_path);
   updater_->add("yolo_detector", this, &YoloDetectorNodelet::diagnose);
   diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.1, updater_->getPeriod())),
                                           [this](const ros::WallTimerEvent&) { updater_->update(); });
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
-  reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this, boost::placeholders::_1,
-                                               boost::placeholders::_2));
+  reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this,
+                                               boost::placeholders::_1, boost::placeholders::_2));
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
-  image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&YoloDetectorNodelet::connectCb, this);
+  image_transport::SubscriberStatusCallback image_connect_cb =
+      boost::bind(&YoloDetectorNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
   pub_detections_ = nh.advertise<Detection2DArray>("detections", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("detections/image", 1, image_connect_cb, image_connect_cb);
@@ -181,17 +184,17 @@ void YoloDetectorNodelet::onInit()
   }
   if (replay_backend_)
   {
-    NODELET_INFO("yolo_detector: replaying %s/%s, frame index from the %s, %s", replay_->config().directory.c_str(),
-                 replay_->config().file_pattern.c_str(), toString(replay_->config().index_source).c_str(),
-                 lazy_ ? "lazy" : "always subscribed");
+    NODELET_INFO("yolo_detector: replaying %s/%s, frame index from the %s, %s",
+                 replay_->config().directory.c_str(), replay_->config().file_pattern.c_str(),
+                 toString(replay_->config().index_source).c_str(), lazy_ ? "lazy" : "always subscribed");
   }
   else
   {
     NODELET_INFO("yolo_detector: %s (%zu classes), input %dx%d %s, %s, score >= %.2f, NMS IoU %.2f, %s",
-                 detector_->config().model_path.c_str(), detector_->classNames().size(), detector_->inputSize().width,
-                 detector_->inputSize().height, toString(detector_->config().resize_mode).c_str(),
-                 detector_->backendDescription().c_str(), score_threshold_, nms_threshold_,
-                 lazy_ ? "lazy" : "always subscribed");
+                 detector_->config().model_path.c_str(), detector_->classNames().size(),
+                 detector_->inputSize().width, detector_->inputSize().height,
+                 toString(detector_->config().resize_mode).c_str(), detector_->backendDescription().c_str(),
+                 score_threshold_, nms_threshold_, lazy_ ? "lazy" : "always subscribed");
   }
 }
 
@@ -209,8 +212,9 @@ void YoloDetectorNodelet::connectCb()
   }
   else if (!sub_image_)
   {
-    sub_image_ = it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
-                                image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+    sub_image_ =
+        it_->subscribe("image", 1, &YoloDetectorNodelet::imageCb, this,
+                       image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
   }
 }
 
@@ -301,8 +305,8 @@ bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detectio
   catch (const std::exception& e)
   {
     NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f (%ux%u, %s) not processed: %s",
-                           sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width, image.height,
-                           image.encoding.c_str(), e.what());
+                           sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width,
+                           image.height, image.encoding.c_str(), e.what());
   }
   return false;
 }
@@ -312,7 +316,8 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   const auto start = std::chrono::steady_clock::now();
   std::vector<Detection> detections;
   const bool ok = detect(frame, detections);
-  const double elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(slot_mutex_);
     if (ok)
@@ -334,7 +339,8 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   {
     publishImage(frame.image, detections);
   }
-  pub_detections_.publish(detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
+  pub_detections_.publish(
+      detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
 }
 
 void YoloDetectorNodelet::publishImage(const sensor_msgs::Image::ConstPtr& image_msg,
@@ -360,7 +366,8 @@ void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   std::lock_guard<std::mutex> lock(slot_mutex_);
   if (frames_failed_ > failed_reported_)
   {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "%lu images could not be processed since the last report",
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
+                    "%lu images could not be processed since the last report",
                     static_cast<unsigned long>(frames_failed_ - failed_reported_));
   }
   else if (frames_dropped_ > dropped_reported_)
@@ -375,7 +382,8 @@ void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   }
   dropped_reported_ = frames_dropped_;
   failed_reported_ = frames_failed_;
-  status.add("backend", replay_backend_ ? std::string("replay") : "opencv_dnn " + detector_->backendDescription());
+  status.add("backend",
+             replay_backend_ ? std::string("replay") : "opencv_dnn " + detector_->backendDescription());
   status.add("frames received", frames_received_);
   status.add("frames processed", frames_processed_);
   status.add("frames dropped", frames_dropped_);

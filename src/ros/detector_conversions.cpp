@@ -1,7 +1,7 @@
 #include "grid_vision_fusion/ros/detector_conversions.h"
 
-#include <boost/make_shared.hpp>
 #include <sensor_msgs/image_encodings.h>
+#include <boost/make_shared.hpp>
 
 #include <map>
 #include <stdexcept>
@@ -25,7 +25,8 @@ PixelFormat pixelFormatFromEncoding(const std::string& encoding)
   {
     return PixelFormat::kMono8;
   }
-  throw std::invalid_argument("image encoding \"" + encoding + "\" is not supported (use rgb8, bgr8 or mono8)");
+  throw std::invalid_argument("image encoding \"" + encoding +
+                              "\" is not supported (use rgb8, bgr8 or mono8)");
 }
 
 Detection2DArray::Ptr detectionsToMsg(const std_msgs::Header& image_header, std::uint32_t image_width,

@@ -59,18 +59,22 @@ std::vector<Detection> detectionsFromMsg(const Detection2DArray& msg)
 std::string checkProjectedGrid(const ProjectedGrid& msg)
 {
   const std::size_t n = msg.u.size();
-  const std::pair<const char*, std::size_t> sizes[] = {
-      {"v", msg.v.size()},   {"depth", msg.depth.size()},         {"x", msg.x.size()},
-      {"y", msg.y.size()},   {"vx", msg.vx.size()},               {"vy", msg.vy.size()},
-      {"p_static", msg.p_static.size()}, {"p_dynamic", msg.p_dynamic.size()},
-      {"state", msg.state.size()}};
+  const std::pair<const char*, std::size_t> sizes[] = {{"v", msg.v.size()},
+                                                       {"depth", msg.depth.size()},
+                                                       {"x", msg.x.size()},
+                                                       {"y", msg.y.size()},
+                                                       {"vx", msg.vx.size()},
+                                                       {"vy", msg.vy.size()},
+                                                       {"p_static", msg.p_static.size()},
+                                                       {"p_dynamic", msg.p_dynamic.size()},
+                                                       {"state", msg.state.size()}};
   for (const auto& [name, size] : sizes)
   {
     if (size != n)
     {
       std::ostringstream error;
-      error << "ProjectedGrid arrays differ in length: u has " << n << " elements, " << name
-            << " has " << size;
+      error << "ProjectedGrid arrays differ in length: u has " << n << " elements, " << name << " has "
+            << size;
       return error.str();
     }
   }
@@ -82,10 +86,8 @@ ProjectedPointsView viewOf(const ProjectedGrid& msg)
   return pointsViewOf(msg);
 }
 
-DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header,
-                                      const std::string& grid_frame_id,
-                                      const std::vector<Detection>& detections,
-                                      const FusionResult& result)
+DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,
+                                      const std::vector<Detection>& detections, const FusionResult& result)
 {
   auto msg = boost::make_shared<DetectedObjectArray>();
   msg->header.stamp = image_header.stamp;

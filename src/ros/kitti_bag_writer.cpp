@@ -1,8 +1,8 @@
 #include "grid_vision_fusion/ros/kitti_bag_writer.h"
 
 #include <cv_bridge/cv_bridge.h>
-#include <rosbag/bag.h>
 #include <ros/message_traits.h>
+#include <rosbag/bag.h>
 #include <sensor_msgs/NavSatStatus.h>
 #include <sensor_msgs/PointField.h>
 #include <tf2_msgs/TFMessage.h>
@@ -44,7 +44,8 @@ constexpr const char* kGpsFixTopic = "/kitti/oxts/gps/fix";
 constexpr const char* kGpsVelTopic = "/kitti/oxts/gps/vel";
 constexpr std::size_t kVelodynePointBytes = 4 * sizeof(float);
 
-std::string frameFile(const std::string& drive_dir, const std::string& folder, int frame, const char* extension)
+std::string frameFile(const std::string& drive_dir, const std::string& folder, int frame,
+                      const char* extension)
 {
   std::ostringstream path;
   path << drive_dir << '/' << folder << "/data/" << std::setw(10) << std::setfill('0') << frame << extension;
@@ -232,8 +233,9 @@ ros::Time toRosTime(const KittiStamp& stamp)
   return ros::Time(static_cast<std::uint32_t>(stamp.sec), stamp.nsec);
 }
 
-geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& parent_from_child, const std::string& parent,
-                                               const std::string& child, const ros::Time& stamp)
+geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& parent_from_child,
+                                               const std::string& parent, const std::string& child,
+                                               const ros::Time& stamp)
 {
   geometry_msgs::TransformStamped msg;
   msg.header.stamp = stamp;
@@ -254,9 +256,10 @@ Eigen::Vector3d kittiCameraCentre(const KittiRawCalibration& calibration, int ca
   if (!p.allFinite() || !(k(0, 0) > 0.0) || !(k(1, 1) > 0.0) || k(1, 0) != 0.0 || k(2, 0) != 0.0 ||
       k(2, 1) != 0.0 || k(2, 2) != 1.0)
   {
-    throw std::runtime_error("P_rect_0" + std::to_string(camera) +
-                             " is not the projection matrix of a rectified camera (want [fx s cx tx; 0 fy cy ty; "
-                             "0 0 1 tz] with fx, fy > 0)");
+    throw std::runtime_error(
+        "P_rect_0" + std::to_string(camera) +
+        " is not the projection matrix of a rectified camera (want [fx s cx tx; 0 fy cy ty; "
+        "0 0 1 tz] with fx, fy > 0)");
   }
   return k.triangularView<Eigen::Upper>().solve(p.col(3));
 }
@@ -281,7 +284,8 @@ std::vector<geometry_msgs::TransformStamped> kittiStaticTransforms(const KittiRa
   return transforms;
 }
 
-sensor_msgs::CameraInfo kittiCameraInfo(const KittiRawCalibration& calibration, int camera, const ros::Time& stamp)
+sensor_msgs::CameraInfo kittiCameraInfo(const KittiRawCalibration& calibration, int camera,
+                                        const ros::Time& stamp)
 {
   const KittiCameraNames names = kittiCameraNames(camera);
   kittiCameraCentre(calibration, camera);  // checks the form of P_rect_0i
@@ -377,8 +381,9 @@ sensor_msgs::Image readKittiImage(const std::string& path, int camera, std::uint
       static_cast<std::uint32_t>(image.rows) != expected_height)
   {
     throw std::runtime_error("image " + path + " is " + std::to_string(image.cols) + "x" +
-                             std::to_string(image.rows) + " px, the calibration (S_rect_0" + std::to_string(camera) +
-                             ") says " + std::to_string(expected_width) + "x" + std::to_string(expected_height) +
+                             std::to_string(image.rows) + " px, the calibration (S_rect_0" +
+                             std::to_string(camera) + ") says " + std::to_string(expected_width) + "x" +
+                             std::to_string(expected_height) +
                              ": wrong calibration folder or not a rectified _sync image");
   }
   if (colour)
@@ -473,8 +478,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
   const int last = options.last_frame >= 0 ? options.last_frame : countVelodyneScans(drive) - 1;
   if (last < first)
   {
-    throw std::invalid_argument("first_frame " + std::to_string(first) + " is after the last frame of " + drive +
-                                " (" + std::to_string(last) + ")");
+    throw std::invalid_argument("first_frame " + std::to_string(first) + " is after the last frame of " +
+                                drive + " (" + std::to_string(last) + ")");
   }
   const auto total = static_cast<std::size_t>(last - first + 1);
 
@@ -491,7 +496,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
   std::vector<OxtsRecord> records = readOxtsFolder(drive + "/oxts");
   if (records.size() <= static_cast<std::size_t>(last))
   {
-    throw std::runtime_error("missing frame: OXTS record " + frameFile(drive, "oxts", static_cast<int>(records.size()), ".txt") +
+    throw std::runtime_error("missing frame: OXTS record " +
+                             frameFile(drive, "oxts", static_cast<int>(records.size()), ".txt") +
                              " does not exist (frame " + std::to_string(last) + " requested)");
   }
   records = std::vector<OxtsRecord>(records.begin() + first, records.begin() + last + 1);
@@ -521,7 +527,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
     }
     bag.setCompression(compressionType(options.compression));
     const auto write = [&](const std::string& topic, const ros::Time& stamp, const auto& msg,
-                           const boost::shared_ptr<ros::M_string>& connection_header = {}) {
+                           const boost::shared_ptr<ros::M_string>& connection_header = {})
+    {
       try
       {
         bag.write(topic, stamp, msg, connection_header);
@@ -553,7 +560,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
       // Sensor messages carry the KITTI frame index in header.seq, so that per-frame files
       // (e.g. label_2 for the detection replay) can be found from a message.
       const ros::Time velo_stamp = toRosTime(velo_stamps[index]);
-      sensor_msgs::PointCloud2 cloud = readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp);
+      sensor_msgs::PointCloud2 cloud =
+          readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp);
       cloud.header.seq = static_cast<std::uint32_t>(frame);
       write(kVeloTopic, velo_stamp, cloud);
 
@@ -562,8 +570,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
         const int camera = options.cameras[c];
         const auto& size = calibration.image_size[static_cast<std::size_t>(camera)];
         const ros::Time stamp = toRosTime(camera_stamps[c][index]);
-        sensor_msgs::Image image =
-            readKittiImage(frameFile(drive, cameras[c].folder, frame, ".png"), camera, size[0], size[1], stamp);
+        sensor_msgs::Image image = readKittiImage(frameFile(drive, cameras[c].folder, frame, ".png"), camera,
+                                                  size[0], size[1], stamp);
         image.header.seq = static_cast<std::uint32_t>(frame);
         write(cameras[c].image_topic, stamp, image);
         sensor_msgs::CameraInfo info = kittiCameraInfo(calibration, camera, stamp);
@@ -589,7 +597,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
   fs::rename(temporary, options.output_bag, error);
   if (error)
   {
-    throw std::runtime_error("cannot move " + temporary + " to " + options.output_bag + ": " + error.message());
+    throw std::runtime_error("cannot move " + temporary + " to " + options.output_bag + ": " +
+                             error.message());
   }
   guard.release();
   return summary;

@@ -74,7 +74,8 @@ bool isYamlInt(const std::string& text, int& value)
   {
     const char c = text[i];
     const bool sign = i == 0 && (c == '-' || c == '+');
-    if (!sign && !(hex ? std::isxdigit(static_cast<unsigned char>(c)) : std::isdigit(static_cast<unsigned char>(c))))
+    if (!sign &&
+        !(hex ? std::isxdigit(static_cast<unsigned char>(c)) : std::isdigit(static_cast<unsigned char>(c))))
     {
       return false;
     }

@@ -58,7 +58,7 @@ PipelineConfig pipelineConfigFromParams(const ParamSource& grid, const ParamSour
 }
 
 Pipeline::Pipeline(const PipelineConfig& config, PipelineOutputs outputs)
-  : config_(config), outputs_(std::move(outputs)), tf_(ros::Duration(tf2::BufferCore::DEFAULT_CACHE_TIME))
+    : config_(config), outputs_(std::move(outputs)), tf_(ros::Duration(tf2::BufferCore::DEFAULT_CACHE_TIME))
 {
   if (!(config_.max_tf_wait >= 0.0))
   {
@@ -82,7 +82,8 @@ Pipeline::Pipeline(const PipelineConfig& config, PipelineOutputs outputs)
   }
   else
   {
-    throw std::invalid_argument("backend must be \"opencv_dnn\" or \"replay\", got \"" + config_.backend + "\"");
+    throw std::invalid_argument("backend must be \"opencv_dnn\" or \"replay\", got \"" + config_.backend +
+                                "\"");
   }
 }
 
@@ -407,8 +408,9 @@ BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag,
   const std::size_t total = view.size();
   if (total == 0)
   {
-    throw std::runtime_error("bag " + input_bag + " has none of the topics " + topics.points + ", " + topics.image +
-                             ", " + topics.camera_info + ", " + topics.tf + ", " + topics.tf_static);
+    throw std::runtime_error("bag " + input_bag + " has none of the topics " + topics.points + ", " +
+                             topics.image + ", " + topics.camera_info + ", " + topics.tf + ", " +
+                             topics.tf_static);
   }
   ros::Time first, last;
   for (const rosbag::MessageInstance& m : view)

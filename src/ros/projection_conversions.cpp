@@ -27,8 +27,9 @@ std::string checkDynamicGrid(const DynamicGrid& msg)
     if (size != cells)
     {
       std::ostringstream error;
-      error << "DynamicGrid array " << name << " has " << size << " elements, expected width*height = "
-            << msg.info.width << "*" << msg.info.height << " = " << cells;
+      error << "DynamicGrid array " << name << " has " << size
+            << " elements, expected width*height = " << msg.info.width << "*" << msg.info.height << " = "
+            << cells;
       return error.str();
     }
   }

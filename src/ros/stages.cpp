@@ -104,12 +104,13 @@ ProjectedGrid::Ptr projectGridIntoCamera(const DynamicGrid& grid, const sensor_m
   geometry.time_offset = grid_age;
   try
   {
-    geometry.camera_from_grid = tf2::transformToEigen(
-        tf.lookupTransform(info.header.frame_id, grid.header.frame_id, image_stamp));
+    geometry.camera_from_grid =
+        tf2::transformToEigen(tf.lookupTransform(info.header.frame_id, grid.header.frame_id, image_stamp));
   }
   catch (const tf2::TransformException& e)
   {
-    throw ProjectionSkipped("no tf " + info.header.frame_id + " <- " + grid.header.frame_id + ": " + e.what());
+    throw ProjectionSkipped("no tf " + info.header.frame_id + " <- " + grid.header.frame_id + ": " +
+                            e.what());
   }
   try
   {
@@ -152,8 +153,8 @@ FusedPair fusePair(const Detection2DArray& detections, const ProjectedGrid& grid
   }
   FusedPair pair;
   pair.detections = detectionsFromMsg(detections);
-  const std::string input_error = checkFusionInputs(pair.detections, detections.image_width,
-                                                    detections.image_height, grid.image_width, grid.image_height);
+  const std::string input_error = checkFusionInputs(
+      pair.detections, detections.image_width, detections.image_height, grid.image_width, grid.image_height);
   if (!input_error.empty())
   {
     throw std::invalid_argument(input_error);

@@ -33,7 +33,7 @@ EvalObject withState(EvalObject o, double x, double y, double vx, double vy)
   return o;
 }
 
-const BoundingBox kA{0.F, 0.F, 9.F, 9.F};      // 10 x 10 pixels with the +1 convention
+const BoundingBox kA{0.F, 0.F, 9.F, 9.F};  // 10 x 10 pixels with the +1 convention
 const BoundingBox kFar{20.F, 20.F, 29.F, 29.F};
 
 EvaluationConfig perClass()
@@ -77,7 +77,8 @@ TEST(Evaluation, VocApAllPointInterpolation)
 
 TEST(Evaluation, DuplicatesAreFalsePositives)
 {
-  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), object("b", "car", Motion::kStatic, kA)};
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA),
+                                   object("b", "car", Motion::kStatic, kA)};
   const std::vector<EvalObject> det{object("a", "car", Motion::kStatic, kA, 0.9F),
                                     object("a", "car", Motion::kStatic, kA, 0.8F),    // duplicate: FP
                                     object("b", "car", Motion::kStatic, kFar, 0.8F),  // no overlap: FP
@@ -98,7 +99,8 @@ TEST(Evaluation, DuplicatesAreFalsePositives)
 
 TEST(Evaluation, TiesKeepTheInputOrder)
 {
-  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), object("b", "car", Motion::kStatic, kA)};
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA),
+                                   object("b", "car", Motion::kStatic, kA)};
   const EvalObject miss = object("a", "car", Motion::kStatic, kFar, 0.9F);
   const EvalObject hit = object("b", "car", Motion::kStatic, kA, 0.9F);
   // FP then TP: rec 0 .5, prec 0 .5 → AP = .5·.5 = .25.
@@ -129,8 +131,9 @@ TEST(Evaluation, NoFallbackToTheSecondBestMatch)
   // .667 with g2: it takes g1 and is a FP although g2 would have matched.
   const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA),
                                    object("a", "car", Motion::kStatic, BoundingBox{3.F, 0.F, 12.F, 9.F})};
-  const std::vector<EvalObject> det{object("a", "car", Motion::kStatic, kA, 0.9F),
-                                    object("a", "car", Motion::kStatic, BoundingBox{1.F, 0.F, 10.F, 9.F}, 0.8F)};
+  const std::vector<EvalObject> det{
+      object("a", "car", Motion::kStatic, kA, 0.9F),
+      object("a", "car", Motion::kStatic, BoundingBox{1.F, 0.F, 10.F, 9.F}, 0.8F)};
   const ClassMetrics car = evaluate(gt, det, perClass()).classes.at(0);
   EXPECT_EQ(car.true_positives, 1U);
   EXPECT_EQ(car.false_positives, 1U);
@@ -139,7 +142,8 @@ TEST(Evaluation, NoFallbackToTheSecondBestMatch)
 
 TEST(Evaluation, ClassWithoutDetectionsCountsZeroInTheMap)
 {
-  const std::vector<EvalObject> gt{object("a", "car", Motion::kDynamic, kA), object("a", "van", Motion::kStatic, kFar)};
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kDynamic, kA),
+                                   object("a", "van", Motion::kStatic, kFar)};
   const std::vector<EvalObject> det{object("a", "car", Motion::kDynamic, kA, 0.9F),
                                     object("a", "truck", Motion::kStatic, kA, 0.9F)};  // class not in the GT
   const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
@@ -148,7 +152,7 @@ TEST(Evaluation, ClassWithoutDetectionsCountsZeroInTheMap)
   EXPECT_EQ(find(r, "staticVan").ground_truth, 1U);
   EXPECT_EQ(find(r, "staticTruck").false_positives, 1U);
   EXPECT_DOUBLE_EQ(r.mean_average_precision, 0.5);  // (1 + 0) / 2: staticTruck is not a GT class
-  EXPECT_EQ(r.classes.back().name, "staticTruck");   // GT classes listed first
+  EXPECT_EQ(r.classes.back().name, "staticTruck");  // GT classes listed first
 }
 
 TEST(Evaluation, RangeFilterDropsFarObjects)
@@ -195,17 +199,19 @@ TEST(Evaluation, ThreeFrameRegression)
   const BoundingBox right{300.F, 100.F, 399.F, 199.F};
   const BoundingBox empty_road{500.F, 100.F, 599.F, 199.F};
   const std::vector<EvalObject> gt{
-      withState(object("f0", "car", Motion::kDynamic, left), 10.0, 0.0, 5.0, 0.0),    // g1
-      withState(object("f0", "car", Motion::kStatic, right), 15.0, 5.0, 0.0, 0.0),    // g2
-      withState(object("f1", "car", Motion::kDynamic, left), 10.5, 0.0, 5.0, 0.0),    // g3
-      withState(object("f1", "van", Motion::kStatic, right), 20.0, -3.0, 0.0, 0.0),   // g4
-      withState(object("f2", "van", Motion::kDynamic, left), 12.0, 1.0, 0.0, 4.0)};   // g5
+      withState(object("f0", "car", Motion::kDynamic, left), 10.0, 0.0, 5.0, 0.0),   // g1
+      withState(object("f0", "car", Motion::kStatic, right), 15.0, 5.0, 0.0, 0.0),   // g2
+      withState(object("f1", "car", Motion::kDynamic, left), 10.5, 0.0, 5.0, 0.0),   // g3
+      withState(object("f1", "van", Motion::kStatic, right), 20.0, -3.0, 0.0, 0.0),  // g4
+      withState(object("f2", "van", Motion::kDynamic, left), 12.0, 1.0, 0.0, 4.0)};  // g5
   const std::vector<EvalObject> det{
-      withState(object("f0", "car", Motion::kDynamic, left, 0.9F), 10.4, 0.3, 4.0, 0.0),   // d1 → g1
-      withState(object("f0", "car", Motion::kDynamic, right, 0.6F), 15.0, 5.0, 1.0, 1.0),  // d2 → g2, wrong motion
+      withState(object("f0", "car", Motion::kDynamic, left, 0.9F), 10.4, 0.3, 4.0, 0.0),  // d1 → g1
+      withState(object("f0", "car", Motion::kDynamic, right, 0.6F), 15.0, 5.0, 1.0,
+                1.0),  // d2 → g2, wrong motion
       withState(object("f1", "car", Motion::kDynamic, left, 0.8F), 10.5, 0.0, 0.0, 5.0),   // d3 → g3
       withState(object("f1", "van", Motion::kStatic, right, 0.7F), 20.0, -2.0, 0.0, 0.0),  // d4 → g4
-      withState(object("f2", "van", Motion::kStatic, left, 0.5F), 12.0, 1.0, 0.0, 0.0),    // d5 → g5, wrong motion
+      withState(object("f2", "van", Motion::kStatic, left, 0.5F), 12.0, 1.0, 0.0,
+                0.0),  // d5 → g5, wrong motion
       withState(object("f2", "car", Motion::kStatic, empty_road, 0.4F), 30.0, 0.0, 0.0, 0.0)};  // d6: FP
   const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
 

@@ -15,8 +15,8 @@ namespace
 {
 namespace fs = std::filesystem;
 
-EvalObject object(const std::string& frame, const std::string& label, Motion motion, BoundingBox box, float score,
-                  double longitudinal_m = 10.0)
+EvalObject object(const std::string& frame, const std::string& label, Motion motion, BoundingBox box,
+                  float score, double longitudinal_m = 10.0)
 {
   EvalObject o;
   o.frame = frame;
@@ -55,9 +55,10 @@ TEST(EvaluationReport, JsonCarriesTheFigures)
   const Case c;
   const std::string json = metricsJson(c.result, c.config);
   EXPECT_NE(json.find("\"mAP\": 0.500000"), std::string::npos) << json;  // dynamicCar 1, staticCar 0
-  EXPECT_NE(json.find("{\"name\": \"dynamicCar\", \"ground_truth\": 1, \"detections\": 2, \"true_positives\": 1, "
-                      "\"false_positives\": 1, \"precision\": 0.500000, \"recall\": 1.000000"),
-            std::string::npos)
+  EXPECT_NE(
+      json.find("{\"name\": \"dynamicCar\", \"ground_truth\": 1, \"detections\": 2, \"true_positives\": 1, "
+                "\"false_positives\": 1, \"precision\": 0.500000, \"recall\": 1.000000"),
+      std::string::npos)
       << json;
   EXPECT_NE(json.find("\"counts\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]]"), std::string::npos) << json;
   // Per class: the confusion and the counts per truth speed band (no state here: moving ones
@@ -104,7 +105,8 @@ TEST(EvaluationReport, CartuchoFolders)
   fs::remove_all(dir);
   writeCartuchoFolders(dir.string(), c.gt, c.det, c.config);
   EXPECT_EQ(readFile(dir / "ground-truth" / "000000.txt"), "dynamicCar 10.00 20.00 109.00 119.00\n");
-  EXPECT_EQ(readFile(dir / "detection-results" / "000000.txt"), "dynamicCar 0.875000 10.00 20.00 109.00 119.00\n");
+  EXPECT_EQ(readFile(dir / "detection-results" / "000000.txt"),
+            "dynamicCar 0.875000 10.00 20.00 109.00 119.00\n");
   // The far van is filtered, but its frame still gets (empty) files in both folders.
   ASSERT_TRUE(fs::exists(dir / "ground-truth" / "000002.txt"));
   EXPECT_EQ(readFile(dir / "ground-truth" / "000002.txt"), "");
@@ -154,7 +156,8 @@ TEST(EvaluationReport, WritesAllOutputs)
     EXPECT_TRUE(fs::exists(dir / name)) << name;
   }
   EXPECT_EQ(cv::imread((dir / "pr_dynamicCar.png").string()).size(), cv::Size(640, 480));
-  EXPECT_THROW(writeEvaluationOutputs("/proc/forbidden/x", c.result, c.config, c.gt, c.det), std::runtime_error);
+  EXPECT_THROW(writeEvaluationOutputs("/proc/forbidden/x", c.result, c.config, c.gt, c.det),
+               std::runtime_error);
 }
 
 }  // namespace grid_vision_fusion

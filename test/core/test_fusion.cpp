@@ -244,12 +244,12 @@ TEST(Fuse, HeadingInAllFourQuadrants)
     float vx, vy;
     double heading;
   };
-  const Case cases[] = {{1.F, 1.F, M_PI / 4},           // quadrant I
-                        {-1.F, 1.F, 3 * M_PI / 4},      // quadrant II
-                        {-1.F, -1.F, -3 * M_PI / 4},    // quadrant III
-                        {1.F, -1.F, -M_PI / 4},         // quadrant IV
-                        {0.F, 2.F, M_PI / 2},           // +y axis
-                        {-3.F, 0.F, M_PI}};             // −x axis
+  const Case cases[] = {{1.F, 1.F, M_PI / 4},         // quadrant I
+                        {-1.F, 1.F, 3 * M_PI / 4},    // quadrant II
+                        {-1.F, -1.F, -3 * M_PI / 4},  // quadrant III
+                        {1.F, -1.F, -M_PI / 4},       // quadrant IV
+                        {0.F, 2.F, M_PI / 2},         // +y axis
+                        {-3.F, 0.F, M_PI}};           // −x axis
   for (const Case& c : cases)
   {
     ProjectedPoints pts;
@@ -267,9 +267,9 @@ TEST(Fuse, OverlappingBoxesShareByDefault)
   const Detection near_car = kBox;
   const Detection far_car = makeDetection(150.F, 120.F, 250.F, 170.F, "van", 0.8F);
   ProjectedPoints pts;
-  addStatic(pts, 170.F, 175.F, 10.F, 0.F);          // in both bands
+  addStatic(pts, 170.F, 175.F, 10.F, 0.F);             // in both bands
   addDynamic(pts, 230.F, 165.F, 25.F, 0.F, 3.F, 0.F);  // far band only
-  addStatic(pts, 120.F, 190.F, 9.F, 1.F);           // near band only
+  addStatic(pts, 120.F, 190.F, 9.F, 1.F);              // near band only
 
   const FusionResult shared = fuse({near_car, far_car}, pts.view(), FusionConfig{});
   ASSERT_EQ(shared.objects.size(), 2U);
@@ -313,8 +313,8 @@ TEST(Fuse, NaNCoordinatesAreIgnored)
   addStatic(pts, 150.F, 180.F, kNaN, 1.F);
   addStatic(pts, 150.F, 180.F, 1.F, std::numeric_limits<float>::infinity());
   addDynamic(pts, 150.F, 180.F, 1.F, 1.F, kNaN, 0.F);  // dynamic without a velocity
-  addStatic(pts, 150.F, 180.F, 4.F, 6.F);             // the only valid point
-  pts.state.push_back(7);                             // an invalid state on a 7th point
+  addStatic(pts, 150.F, 180.F, 4.F, 6.F);              // the only valid point
+  pts.state.push_back(7);                              // an invalid state on a 7th point
   for (auto* array : {&pts.u, &pts.v, &pts.x, &pts.y, &pts.vx, &pts.vy})
   {
     array->push_back(150.F);
@@ -343,13 +343,16 @@ TEST(CheckFusionInputs, AcceptsGoodAndNamesTheFault)
   EXPECT_EQ(checkFusionInputs({kBox}, 640, 480, 640, 480), "");
   EXPECT_EQ(checkFusionInputs({}, 640, 480, 640, 480), "");
   EXPECT_NE(checkFusionInputs({kBox}, 640, 480, 1242, 375).find("image size mismatch"), std::string::npos);
-  const std::string swapped = checkFusionInputs({makeDetection(200.F, 100.F, 100.F, 180.F)}, 640, 480, 640, 480);
+  const std::string swapped =
+      checkFusionInputs({makeDetection(200.F, 100.F, 100.F, 180.F)}, 640, 480, 640, 480);
   EXPECT_NE(swapped.find("x_min > x_max"), std::string::npos) << swapped;
   EXPECT_NE(swapped.find("detection 0"), std::string::npos) << swapped;
-  const std::string outside = checkFusionInputs({kBox, makeDetection(600.F, 100.F, 700.F, 180.F)}, 640, 480, 640, 480);
+  const std::string outside =
+      checkFusionInputs({kBox, makeDetection(600.F, 100.F, 700.F, 180.F)}, 640, 480, 640, 480);
   EXPECT_NE(outside.find("detection 1"), std::string::npos) << outside;
   EXPECT_NE(outside.find("outside"), std::string::npos) << outside;
-  const std::string nan_box = checkFusionInputs({makeDetection(kNaN, 100.F, 200.F, 180.F)}, 640, 480, 640, 480);
+  const std::string nan_box =
+      checkFusionInputs({makeDetection(kNaN, 100.F, 200.F, 180.F)}, 640, 480, 640, 480);
   EXPECT_NE(nan_box.find("non-finite"), std::string::npos) << nan_box;
   // Half a pixel past the border is tolerated (detectors clip to the pixel grid).
   EXPECT_EQ(checkFusionInputs({makeDetection(0.F, 0.F, 640.5F, 480.F)}, 640, 480, 640, 480), "");

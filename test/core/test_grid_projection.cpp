@@ -34,8 +34,15 @@ struct TestGrid
   std::vector<float> p_static, p_dynamic, vx, vy;
 
   TestGrid(std::uint32_t w, std::uint32_t h, double res, double ox, double oy)
-    : width(w), height(h), resolution(res), origin_x(ox), origin_y(oy), p_static(w * h, 0.F),
-      p_dynamic(w * h, 0.F), vx(w * h, 0.F), vy(w * h, 0.F)
+      : width(w),
+        height(h),
+        resolution(res),
+        origin_x(ox),
+        origin_y(oy),
+        p_static(w * h, 0.F),
+        p_dynamic(w * h, 0.F),
+        vx(w * h, 0.F),
+        vy(w * h, 0.F)
   {
   }
 
@@ -69,7 +76,10 @@ struct TestGrid
 
 /// A grid in the velodyne frame covering x ∈ [-20, 40), y ∈ [-30, 30) with 0.2 m cells: the
 /// centre of a cell lies at odd multiples of 0.1 m, so (10.1, 0.1) etc. are cell centres.
-TestGrid veloGrid() { return TestGrid(300, 300, 0.2, -20.0, -30.0); }
+TestGrid veloGrid()
+{
+  return TestGrid(300, 300, 0.2, -20.0, -30.0);
+}
 
 /// KITTI 2011_09_26 colour camera 2 with the grid in the velodyne frame.
 struct KittiSetup
@@ -98,12 +108,14 @@ TEST(PinholeCamera, KittiCheckValues)
   const KittiSetup kitti;
   Eigen::Vector2d pixel;
   double depth = 0.0;
-  ASSERT_TRUE(kitti.camera.project(kitti.geometry.camera_from_grid * Eigen::Vector3d(10.0, 0.0, -1.73), pixel, depth));
+  ASSERT_TRUE(kitti.camera.project(kitti.geometry.camera_from_grid * Eigen::Vector3d(10.0, 0.0, -1.73), pixel,
+                                   depth));
   EXPECT_NEAR(pixel.x(), 615.3, kPixelTolerance);
   EXPECT_NEAR(pixel.y(), 303.5, kPixelTolerance);
   // The velodyne is 0.27 m behind camera 0 and camera 2 0.06 m ahead of it along the axis.
   EXPECT_NEAR(depth, 10.0 - 0.27 - 0.02, 0.05);
-  ASSERT_TRUE(kitti.camera.project(kitti.geometry.camera_from_grid * Eigen::Vector3d(10.0, 0.0, 0.0), pixel, depth));
+  ASSERT_TRUE(
+      kitti.camera.project(kitti.geometry.camera_from_grid * Eigen::Vector3d(10.0, 0.0, 0.0), pixel, depth));
   EXPECT_NEAR(pixel.x(), 614.0, kPixelTolerance);
   EXPECT_NEAR(pixel.y(), 175.0, kPixelTolerance);
   EXPECT_FALSE(kitti.camera.project(Eigen::Vector3d(0.0, 0.0, -5.0), pixel, depth));
@@ -240,7 +252,8 @@ TEST(GridProjection, TimeAlignmentMovesDynamicCellsWithTheirVelocity)
   EXPECT_NEAR(cells.x[dyn], 10.1, 1e-5);
   const Eigen::Vector2d unmoved = kitti.pixelOf(Eigen::Vector3d(10.1, 0.1, -1.73));
   EXPECT_NEAR(cells.v[dyn], unmoved.y(), 1e-3);
-  EXPECT_GT(cells.v[dyn] - predicted.y(), 2.0) << "the unmoved cell, 0.5 m nearer, must land visibly lower in the image";
+  EXPECT_GT(cells.v[dyn] - predicted.y(), 2.0)
+      << "the unmoved cell, 0.5 m nearer, must land visibly lower in the image";
 }
 
 TEST(GridProjection, SelectsCellsByThresholdAndDecidesTheirState)
@@ -292,20 +305,24 @@ TEST(GridProjection, RejectsBadInputsNamingThem)
   TestGrid grid = veloGrid();
   GridCellsView view = grid.view();
   view.resolution = 0.0;
-  EXPECT_THROW(projectGrid(view, kitti.camera, kitti.geometry, GridProjectionConfig{}), std::invalid_argument);
+  EXPECT_THROW(projectGrid(view, kitti.camera, kitti.geometry, GridProjectionConfig{}),
+               std::invalid_argument);
   view = grid.view();
   view.vy = nullptr;
-  EXPECT_THROW(projectGrid(view, kitti.camera, kitti.geometry, GridProjectionConfig{}), std::invalid_argument);
+  EXPECT_THROW(projectGrid(view, kitti.camera, kitti.geometry, GridProjectionConfig{}),
+               std::invalid_argument);
   ProjectionGeometry geometry = kitti.geometry;
   geometry.ground_z = std::numeric_limits<double>::infinity();
-  EXPECT_THROW(projectGrid(grid.view(), kitti.camera, geometry, GridProjectionConfig{}), std::invalid_argument);
+  EXPECT_THROW(projectGrid(grid.view(), kitti.camera, geometry, GridProjectionConfig{}),
+               std::invalid_argument);
 
   // An empty grid is valid and gives nothing.
   GridCellsView empty;
   empty.resolution = 0.2;
   EXPECT_EQ(projectGrid(empty, kitti.camera, kitti.geometry, GridProjectionConfig{}).size(), 0U);
 
-  const auto expectField = [](GridProjectionConfig config, const std::string& field) {
+  const auto expectField = [](GridProjectionConfig config, const std::string& field)
+  {
     try
     {
       config.validate();
@@ -378,9 +395,9 @@ std::vector<KittiLabel> readLabels(const std::string& path)
     std::istringstream fields(line);
     KittiLabel label;
     double truncated = 0.0, occluded = 0.0, alpha = 0.0;
-    if (fields >> label.type >> truncated >> occluded >> alpha >> label.box[0] >> label.box[1] >> label.box[2] >>
-        label.box[3] >> label.h >> label.w >> label.l >> label.location.x() >> label.location.y() >>
-        label.location.z() >> label.rotation_y)
+    if (fields >> label.type >> truncated >> occluded >> alpha >> label.box[0] >> label.box[1] >>
+        label.box[2] >> label.box[3] >> label.h >> label.w >> label.l >> label.location.x() >>
+        label.location.y() >> label.location.z() >> label.rotation_y)
     {
       labels.push_back(label);
     }
@@ -409,7 +426,8 @@ bool insideBox(const KittiLabel& label, const Eigen::Vector3d& p)
 {
   // Object frame: x along its length, y down (0 at the bottom), z along its width; the box is
   // rotated by ry around the camera y axis.
-  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(label.rotation_y, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(label.rotation_y, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::Vector3d local = rotation.transpose() * (p - label.location);
   return std::abs(local.x()) <= label.l / 2 && local.y() <= 0.0 && local.y() >= -label.h &&
          std::abs(local.z()) <= label.w / 2;
@@ -426,7 +444,8 @@ TEST_P(KittiObjectFrame, LidarPointsOfEachBoxProjectIntoItsImageBox)
   const KittiObjectCalibration calib = KittiObjectCalibration::read(dir + "calib/" + frame + ".txt");
   const cv::Mat image = cv::imread(dir + "image_2/" + frame + ".png", cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(image.empty());
-  const PinholeCamera camera(calib.p[2], static_cast<std::uint32_t>(image.cols), static_cast<std::uint32_t>(image.rows));
+  const PinholeCamera camera(calib.p[2], static_cast<std::uint32_t>(image.cols),
+                             static_cast<std::uint32_t>(image.rows));
   const Eigen::Isometry3d rect_from_velo = calib.rectifiedFromVelo();
   const std::vector<Eigen::Vector3d> scan = readVelodyne(dir + "velodyne/" + frame + ".bin");
   ASSERT_GT(scan.size(), 100000U);
@@ -462,8 +481,8 @@ TEST_P(KittiObjectFrame, LidarPointsOfEachBoxProjectIntoItsImageBox)
     }
     cars += label.type == "Car" ? 1 : 0;
     EXPECT_GE(static_cast<double>(inside) / points, 0.9)
-        << frame << " " << label.type << " at z = " << label.location.z() << " m: " << inside << " of " << points
-        << " lidar points inside its 2-D box";
+        << frame << " " << label.type << " at z = " << label.location.z() << " m: " << inside << " of "
+        << points << " lidar points inside its 2-D box";
   }
   EXPECT_GE(cars, 1) << "frame " << frame << " has no car with lidar points";
 }
@@ -507,8 +526,8 @@ TEST(GridProjection, KittiCarCellsProjectIntoItsFusionBand)
   ProjectionGeometry geometry;
   geometry.camera_from_grid = rect_from_velo;
   geometry.ground_z = (rect_from_velo.inverse() * car.location).z();  // the car's bottom, velodyne frame
-  const ProjectedCells cells = projectGrid(grid.view(), PinholeCamera(calib.p[2], 1242, 375), geometry,
-                                           GridProjectionConfig{});
+  const ProjectedCells cells =
+      projectGrid(grid.view(), PinholeCamera(calib.p[2], 1242, 375), geometry, GridProjectionConfig{});
   ASSERT_GT(cells.size(), 5U);
   const double box_height = car.box[3] - car.box[1];
   std::size_t in_band = 0;

@@ -31,7 +31,8 @@ void expectErrorNaming(Call call, std::initializer_list<std::string> parts)
   {
     for (const auto& part : parts)
     {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << "'" << part << "' not in: " << e.what();
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+          << "'" << part << "' not in: " << e.what();
     }
   }
 }
@@ -143,7 +144,8 @@ TEST(KittiCalibrationFile, KeepsTextValuesApartFromNumbers)
   EXPECT_TRUE(file.has("S_rect_00"));
   EXPECT_FALSE(file.has("calib_time"));
   EXPECT_EQ(file.values("S_rect_00", 2), (std::vector<double>{1242.0, 375.0}));
-  expectErrorNaming([&] { file.values("calib_time", 1); }, {"inline.txt", "calib_time", "does not hold numbers"});
+  expectErrorNaming([&] { file.values("calib_time", 1); },
+                    {"inline.txt", "calib_time", "does not hold numbers"});
 }
 
 TEST(KittiCalibrationFile, ErrorsNameTheFileAndTheKey)
@@ -157,7 +159,8 @@ TEST(KittiCalibrationFile, ErrorsNameTheFileAndTheKey)
   expectErrorNaming([&] { KittiCalibrationFile::parse(no_colon, "broken.txt"); }, {"broken.txt", "line 1"});
   expectErrorNaming([] { KittiCalibrationFile::read("/nonexistent/calib.txt"); },
                     {"/nonexistent/calib.txt", "cannot be opened"});
-  expectErrorNaming([] { KittiObjectCalibration::read("/nonexistent/000000.txt"); }, {"/nonexistent/000000.txt"});
+  expectErrorNaming([] { KittiObjectCalibration::read("/nonexistent/000000.txt"); },
+                    {"/nonexistent/000000.txt"});
 }
 
 TEST(KittiRawCalibration, MissingFileOrKeyIsNamed)

@@ -13,7 +13,8 @@ namespace grid_vision_fusion
 {
 namespace
 {
-const std::string kDrive = std::string(GVF_TEST_DATA_DIR) + "/kitti_raw_2011_09_26/2011_09_26_drive_0001_sync";
+const std::string kDrive =
+    std::string(GVF_TEST_DATA_DIR) + "/kitti_raw_2011_09_26/2011_09_26_drive_0001_sync";
 
 std::string writeTemp(const std::string& name, const std::string& content)
 {
@@ -75,7 +76,8 @@ TEST(KittiOxts, MercatorPoseOfTheEquatorOrigin)
   r.yaw = M_PI / 2;
   const Eigen::Isometry3d pose = oxtsToMercatorPose(r, mercatorScale(0.0));
   EXPECT_NEAR(pose.translation().norm() - 5.0, 0.0, 1e-9);
-  EXPECT_TRUE(pose.linear().isApprox(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix()));
+  EXPECT_TRUE(
+      pose.linear().isApprox(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix()));
   // One degree of longitude at the equator: 6378137·π/180 = 111319.49 m east.
   r.lon = 1.0;
   EXPECT_NEAR(oxtsToMercatorPose(r, 1.0).translation().x(), 111319.490793, 1e-5);
@@ -83,11 +85,13 @@ TEST(KittiOxts, MercatorPoseOfTheEquatorOrigin)
 
 TEST(KittiOxts, MalformedRecordsNameTheFile)
 {
-  EXPECT_NE(errorOf([] { parseOxtsLine("1 2 3", "rec.txt"); }).find("rec.txt: an OXTS record needs 30 numbers, read 3"),
+  EXPECT_NE(errorOf([] { parseOxtsLine("1 2 3", "rec.txt"); })
+                .find("rec.txt: an OXTS record needs 30 numbers, read 3"),
             std::string::npos);
   EXPECT_NE(errorOf([] { parseOxtsLine("1 2 x", "rec.txt"); }).find("non-number"), std::string::npos);
-  EXPECT_NE(errorOf([] { readOxtsFolder("/nonexistent/oxts"); }).find("/nonexistent/oxts/data/0000000000.txt"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([] { readOxtsFolder("/nonexistent/oxts"); }).find("/nonexistent/oxts/data/0000000000.txt"),
+      std::string::npos);
 }
 
 TEST(KittiTimestamps, ParsesNanoseconds)
@@ -100,7 +104,8 @@ TEST(KittiTimestamps, ParsesNanoseconds)
   EXPECT_NEAR(stamps[1].toSec() - stamps[0].toSec(), 0.103123456, 1e-6);
   const KittiStamp short_fraction = parseKittiStamp("2011-09-26 13:02:25.5", "x");
   EXPECT_EQ(short_fraction.nsec, 500000000U);
-  EXPECT_NE(errorOf([] { parseKittiStamp("2011-09-26 13:02", "cam.txt:3"); }).find("cam.txt:3"), std::string::npos);
+  EXPECT_NE(errorOf([] { parseKittiStamp("2011-09-26 13:02", "cam.txt:3"); }).find("cam.txt:3"),
+            std::string::npos);
   const std::string bad = writeTemp("bad_stamps.txt", "2011-09-26 13:02:25.1\nnot a stamp\n");
   EXPECT_NE(errorOf([&] { readTimestamps(bad); }).find("bad_stamps.txt:2"), std::string::npos);
 }
@@ -134,15 +139,19 @@ TEST(KittiTracklets, ReadsTheRealLabels)
 
 TEST(KittiTracklets, BrokenFilesNameTheFault)
 {
-  EXPECT_NE(errorOf([] { readTracklets("/nonexistent/tracklet_labels.xml"); }).find("/nonexistent/tracklet_labels.xml"),
+  EXPECT_NE(errorOf([] { readTracklets("/nonexistent/tracklet_labels.xml"); })
+                .find("/nonexistent/tracklet_labels.xml"),
             std::string::npos);
   const std::string wrong_count = writeTemp(
       "wrong_count.xml",
-      "<boost_serialization><tracklets><count>2</count><item><objectType>Car</objectType><h>1</h><w>1</w><l>1</l>"
+      "<boost_serialization><tracklets><count>2</count><item><objectType>Car</objectType><h>1</h><w>1</"
+      "w><l>1</l>"
       "<first_frame>0</first_frame><poses><count>0</count></poses></item></tracklets></boost_serialization>");
-  EXPECT_NE(errorOf([&] { readTracklets(wrong_count); }).find("<count> says 2 tracklets, found 1"), std::string::npos);
-  const std::string no_type = writeTemp(
-      "no_type.xml", "<boost_serialization><tracklets><count>1</count><item><h>1</h></item></tracklets></boost_serialization>");
+  EXPECT_NE(errorOf([&] { readTracklets(wrong_count); }).find("<count> says 2 tracklets, found 1"),
+            std::string::npos);
+  const std::string no_type = writeTemp("no_type.xml",
+                                        "<boost_serialization><tracklets><count>1</count><item><h>1</h></"
+                                        "item></tracklets></boost_serialization>");
   EXPECT_NE(errorOf([&] { readTracklets(no_type); }).find("tracklet 0: missing or malformed <objectType>"),
             std::string::npos);
 }

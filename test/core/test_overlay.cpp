@@ -9,7 +9,10 @@ namespace grid_vision_fusion
 {
 namespace
 {
-cv::Vec3b at(const cv::Mat& image, int u, int v) { return image.at<cv::Vec3b>(v, u); }
+cv::Vec3b at(const cv::Mat& image, int u, int v)
+{
+  return image.at<cv::Vec3b>(v, u);
+}
 }  // namespace
 
 TEST(Overlay, LabelText)
@@ -37,7 +40,7 @@ TEST(Overlay, BoxesColouredByMotionAndPointsByState)
 
   drawFusionOverlay(image, {moving, parked}, result, points.view(), config);
   // Left edge of each box (thickness 2), below the label: the motion colour.
-  EXPECT_EQ(at(image, 20, 100), cv::Vec3b(0, 200, 0));  // dynamic: green
+  EXPECT_EQ(at(image, 20, 100), cv::Vec3b(0, 200, 0));   // dynamic: green
   EXPECT_EQ(at(image, 160, 100), cv::Vec3b(255, 0, 0));  // static: blue
   // The projected points: dynamic green, static blue.
   EXPECT_EQ(at(image, 70, 150), cv::Vec3b(0, 200, 0));

@@ -52,11 +52,13 @@ struct Drive
     options.calibration_dir = kCalibration;
     fs::remove_all(options.output_root);
     int calls = 0;
-    summary = writeSyntheticDrive(smallScenario(), options, [&](int done, int total) {
-      ++calls;
-      EXPECT_EQ(done, calls);
-      EXPECT_EQ(total, 3);
-    });
+    summary = writeSyntheticDrive(smallScenario(), options,
+                                  [&](int done, int total)
+                                  {
+                                    ++calls;
+                                    EXPECT_EQ(done, calls);
+                                    EXPECT_EQ(total, 3);
+                                  });
     EXPECT_EQ(calls, 3);
   }
 };
@@ -98,7 +100,8 @@ TEST(SyntheticDrive, OxtsAndTimestampsReadBack)
   EXPECT_EQ(stamps[0].sec, 1317042000);  // 2011-09-26 13:00:00 UTC
   const auto nanoseconds = [](const KittiStamp& s) { return s.sec * 1000000000LL + s.nsec; };
   EXPECT_EQ(nanoseconds(stamps[2]) - nanoseconds(stamps[0]), 200000000LL);
-  const std::vector<KittiStamp> starts = readTimestamps((dir / "velodyne_points/timestamps_start.txt").string());
+  const std::vector<KittiStamp> starts =
+      readTimestamps((dir / "velodyne_points/timestamps_start.txt").string());
   EXPECT_EQ(nanoseconds(stamps[0]) - nanoseconds(starts[0]), 50000000LL);
   // The IMU moves 1 m per frame along world x = east = OXTS yaw 0.
   const std::vector<OxtsRecord> records = readOxtsFolder((dir / "oxts").string());
@@ -206,7 +209,8 @@ TEST(SyntheticDrive, RecordedDriveReplaysTheTracklets)
   {
     const Tracklet& t = recorded_tracklets[k];
     EXPECT_TRUE(scenario.actors[k].activeAt(scenario.frameTime(t.first_frame)));
-    EXPECT_FALSE(scenario.actors[k].activeAt(scenario.frameTime(t.first_frame + static_cast<int>(t.poses.size()))));
+    EXPECT_FALSE(
+        scenario.actors[k].activeAt(scenario.frameTime(t.first_frame + static_cast<int>(t.poses.size()))));
   }
 
   // Written out and read back, the tracklets come back where they were recorded (the flat
@@ -230,7 +234,8 @@ TEST(SyntheticDrive, RecordedDriveReplaysTheTracklets)
     ASSERT_EQ(replayed[k].poses.size(), 2U);
     EXPECT_NEAR(replayed[k].poses[1].tx, recorded_tracklets[k].poses[1].tx, 0.1) << "tracklet " << k;
     EXPECT_NEAR(replayed[k].poses[1].ty, recorded_tracklets[k].poses[1].ty, 0.1) << "tracklet " << k;
-    EXPECT_NEAR(std::remainder(replayed[k].poses[1].rz - recorded_tracklets[k].poses[1].rz, 2 * M_PI), 0.0, 0.02);
+    EXPECT_NEAR(std::remainder(replayed[k].poses[1].rz - recorded_tracklets[k].poses[1].rz, 2 * M_PI), 0.0,
+                0.02);
     ++compared;
   }
   EXPECT_GE(compared, 3U);

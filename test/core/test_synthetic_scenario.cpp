@@ -56,14 +56,16 @@ TEST(SyntheticScenario, ErrorsNameTheEntry)
   EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}}\nactors:\n  - {type: Car, parked: {x: 1, y: 2}}\n")
                 .find("actors[0]: missing key 'size'"),
             std::string::npos);
-  EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}, waypoints: [[0, 0, 0]]}\n").find("exactly one of"), std::string::npos);
+  EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}, waypoints: [[0, 0, 0]]}\n").find("exactly one of"),
+            std::string::npos);
   EXPECT_NE(errorOf("ego: {waypoints: [[1, 0, 0], [0, 5, 0]]}\n").find("ego.waypoints: waypoint times"),
             std::string::npos);
   EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}}\nactors:\n  - {type: Car, size: [4, 2, 1.5], color: red, "
                     "parked: {x: 1, y: 2}}\n")
                 .find("colour \"red\""),
             std::string::npos);
-  EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}}\nduration: -1\n").find("duration must be > 0"), std::string::npos);
+  EXPECT_NE(errorOf("ego: {parked: {x: 0, y: 0}}\nduration: -1\n").find("duration must be > 0"),
+            std::string::npos);
   EXPECT_NE(errorOf("ego: {parked: {x: zero, y: 0}}\n").find("'x' has the wrong type"), std::string::npos);
   EXPECT_NE(errorOf("ego: [unclosed\n").find("cannot read scenario"), std::string::npos);
   EXPECT_EQ(parseColor("#0a0B0c"), 0x0A0B0CU);

@@ -26,7 +26,8 @@ TEST(Trajectory, WaypointsInterpolateAndHoldTheHeading)
 TEST(Trajectory, StopAndGoKeepsTheHeadingWhileStanding)
 {
   // East 10 m, stand 2 s, then north.
-  const Trajectory t = Trajectory::waypoints({{0.0, 0.0, 0.0}, {1.0, 10.0, 0.0}, {3.0, 10.0, 0.0}, {4.0, 10.0, 5.0}});
+  const Trajectory t =
+      Trajectory::waypoints({{0.0, 0.0, 0.0}, {1.0, 10.0, 0.0}, {3.0, 10.0, 0.0}, {4.0, 10.0, 5.0}});
   EXPECT_NEAR(t.poseAt(2.0).yaw, 0.0, 1e-12);
   EXPECT_DOUBLE_EQ(t.velocityAt(2.0).norm(), 0.0);
   EXPECT_NEAR(t.poseAt(3.5).yaw, M_PI / 2, 1e-12);
@@ -60,7 +61,8 @@ TEST(RayBox, EntryRangeAndNormal)
   EXPECT_NEAR(hit.range, 8.0, 1e-12);
   EXPECT_TRUE(hit.normal.isApprox(-Eigen::Vector3d::UnitX()));
   // Over the roof: miss.
-  EXPECT_FALSE(std::isfinite(intersectBox(box, Eigen::Vector3d(0.0, 0.0, 1.6), Eigen::Vector3d::UnitX()).range));
+  EXPECT_FALSE(
+      std::isfinite(intersectBox(box, Eigen::Vector3d(0.0, 0.0, 1.6), Eigen::Vector3d::UnitX()).range));
   // Turned 90°: now 2 m wide along x, so the face is at 9 m.
   box.pose.yaw = M_PI / 2;
   EXPECT_NEAR(intersectBox(box, Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d::UnitX()).range, 9.0, 1e-9);
@@ -102,7 +104,8 @@ TEST(SceneSnapshot, NearestHitAndHiddenActors)
   // wall at 40 m); the near car at 10 m stays.
   SceneSnapshot culled = scene;
   culled.cullBeyond(Eigen::Vector2d::Zero(), 15.0);
-  EXPECT_EQ(culled.cast(Eigen::Vector3d(0.0, 0.0, 3.0), Eigen::Vector3d::UnitX(), 0.1, 100.0).object, RayHit::kNothing);
+  EXPECT_EQ(culled.cast(Eigen::Vector3d(0.0, 0.0, 3.0), Eigen::Vector3d::UnitX(), 0.1, 100.0).object,
+            RayHit::kNothing);
   along.clear();
   culled.actorsAlong(origin, Eigen::Vector3d::UnitX(), 0.1, 100.0, along);
   EXPECT_EQ(along, (std::vector<int>{0}));

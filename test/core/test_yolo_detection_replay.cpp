@@ -117,19 +117,26 @@ TEST(DetectionReplayTest, MalformedFileErrorNamesFileAndLine)
 TEST(DetectionReplayTest, ConfigValidation)
 {
   EXPECT_NO_THROW(groundTruthConfig().validate());
-  auto invalid = [](const std::function<void(DetectionReplayConfig&)>& change) {
+  auto invalid = [](const std::function<void(DetectionReplayConfig&)>& change)
+  {
     DetectionReplayConfig config = groundTruthConfig();
     change(config);
     return [config] { config.validate(); };
   };
   EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.directory.clear(); })(), std::invalid_argument);
   EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "%s.txt"; })(), std::invalid_argument);
-  EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "%d_%d.txt"; })(), std::invalid_argument);
-  EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "frame.txt"; })(), std::invalid_argument);
+  EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "%d_%d.txt"; })(),
+               std::invalid_argument);
+  EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "frame.txt"; })(),
+               std::invalid_argument);
   EXPECT_NO_THROW(invalid([](DetectionReplayConfig& c) { c.file_pattern = "100%% %010d.txt"; })());
   EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.first_index = -1; })(), std::invalid_argument);
   EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.default_score = 1.5; })(), std::invalid_argument);
-  EXPECT_THROW(invalid([](DetectionReplayConfig& c) { c.class_map = {{"Car", ""}}; })(), std::invalid_argument);
+  EXPECT_THROW(invalid(
+                   [](DetectionReplayConfig& c) {
+                     c.class_map = {{"Car", ""}};
+                   })(),
+               std::invalid_argument);
   DetectionReplayConfig absent = groundTruthConfig();
   absent.directory = kLabelDir + "/absent";
   EXPECT_THROW(DetectionReplay{absent}, std::invalid_argument);

@@ -151,8 +151,10 @@ TEST_F(YoloDetectorTest, OpenCvZeroesScoresBelowTheYoloLayerThresh)
 TEST_F(YoloDetectorTest, WrongImageTypeIsRefused)
 {
   YoloDetector detector(tinyConfig());
-  EXPECT_THROW(detector.detect(cv::Mat(16, 16, CV_8UC1, cv::Scalar(0)), PixelFormat::kBgr8), std::invalid_argument);
-  EXPECT_THROW(detector.detect(cv::Mat(16, 16, CV_16UC3, cv::Scalar(0)), PixelFormat::kRgb8), std::invalid_argument);
+  EXPECT_THROW(detector.detect(cv::Mat(16, 16, CV_8UC1, cv::Scalar(0)), PixelFormat::kBgr8),
+               std::invalid_argument);
+  EXPECT_THROW(detector.detect(cv::Mat(16, 16, CV_16UC3, cv::Scalar(0)), PixelFormat::kRgb8),
+               std::invalid_argument);
   EXPECT_THROW(detector.detect(cv::Mat(), PixelFormat::kMono8), std::invalid_argument);
 }
 
@@ -254,7 +256,8 @@ TEST_F(YoloDetectorTest, ClassMapFiltersAndRenames)
   YoloDetectorConfig config = tinyConfig();
   config.class_map = {{"car", "car"}, {"truck", "lorry"}};
   YoloDetector detector(config);
-  const auto detections = detector.detect(imageWithPixel({16, 16}, 5, 7, {255, 255, 255}), PixelFormat::kBgr8);
+  const auto detections =
+      detector.detect(imageWithPixel({16, 16}, 5, 7, {255, 255, 255}), PixelFormat::kBgr8);
   ASSERT_EQ(detections.size(), 2U) << "person is not in the map and must be dropped";
   std::vector<std::string> labels{detections[0].label, detections[1].label};
   std::sort(labels.begin(), labels.end());
@@ -339,7 +342,8 @@ TEST_F(YoloDetectorTest, MismatchedAndCorruptFilesAreNamedInTheError)
     std::ofstream names(config.class_names_path, std::ios::app);
     names << "bus\n";
   }
-  expectModelError([&] { YoloDetector detector(config); }, {config.class_names_path, "4 classes", "classes=3"});
+  expectModelError([&] { YoloDetector detector(config); },
+                   {config.class_names_path, "4 classes", "classes=3"});
 
   const YoloDetectorConfig fresh = tinyConfig();
   {
@@ -370,7 +374,8 @@ TEST(YoloDetectorConfigTest, ValidateNamesTheField)
   good.weights_path = "m.weights";
   good.class_names_path = "m.names";
   EXPECT_NO_THROW(good.validate());
-  auto expectInvalid = [&](const std::function<void(YoloDetectorConfig&)>& change, const std::string& field) {
+  auto expectInvalid = [&](const std::function<void(YoloDetectorConfig&)>& change, const std::string& field)
+  {
     YoloDetectorConfig bad = good;
     change(bad);
     try
@@ -394,7 +399,8 @@ TEST(YoloDetectorConfigTest, ValidateNamesTheField)
   expectInvalid([](YoloDetectorConfig& c) { c.target = "tpu"; }, "target");
   expectInvalid([](YoloDetectorConfig& c) { c.class_map = {{"car", ""}}; }, "class_map");
   expectInvalid(
-      [](YoloDetectorConfig& c) {
+      [](YoloDetectorConfig& c)
+      {
         c.model_path = "m.onnx";
         c.weights_path.clear();
       },
@@ -427,13 +433,14 @@ TEST(DarknetCfgTest, Yolov4TinyStyleGroupedRouteIsCounted)
   // sees 8 of the 16 channels: 4 biases + 4 × 8 weights; the first: 16 + 3 BN × 16 + 16 × 3 × 9.
   const std::string dir = test::makeTempDirectory();
   const std::string path = dir + "/v4tiny.cfg";
-  std::ofstream(path) << "[net]\nwidth=32\nheight=32\nchannels=3\n"
-                         "[convolutional]\nbatch_normalize=1\nfilters=16\nsize=3\nstride=2\npad=1\nactivation=mish\n"
-                         "[route]\nlayers=-1\ngroups=2\ngroup_id=1\n"
-                         "[convolutional]\nfilters=4\nsize=1\nstride=1\npad=1\nactivation=linear\n"
-                         "[route]\nlayers = -1, -3\n"
-                         "[maxpool]\nsize=2\nstride=2\n"
-                         "[yolo]\nmask=0\nanchors=1,1\nclasses=7\nnum=1\n";
+  std::ofstream(path)
+      << "[net]\nwidth=32\nheight=32\nchannels=3\n"
+         "[convolutional]\nbatch_normalize=1\nfilters=16\nsize=3\nstride=2\npad=1\nactivation=mish\n"
+         "[route]\nlayers=-1\ngroups=2\ngroup_id=1\n"
+         "[convolutional]\nfilters=4\nsize=1\nstride=1\npad=1\nactivation=linear\n"
+         "[route]\nlayers = -1, -3\n"
+         "[maxpool]\nsize=2\nstride=2\n"
+         "[yolo]\nmask=0\nanchors=1,1\nclasses=7\nnum=1\n";
   const DarknetCfgInfo info = parseDarknetCfg(path);
   EXPECT_EQ(info.parameters, 16U + 48U + 16U * 3U * 9U + 4U + 4U * 8U);
   EXPECT_EQ(info.num_classes, 7);
@@ -469,8 +476,8 @@ TEST(DecodeTest, PixelLayoutMultipliesObjectnessAndSkipsBadRows)
 {
   // Two classes; rows [cx, cy, w, h, objectness, p0, p1] in network pixels (an ONNX export).
   cv::Mat rows = (cv::Mat_<float>(3, 7) << 50, 40, 20, 10, 0.5F, 0.2F, 0.9F,  //
-                  10, 10, 4, 4, 0.F, 1.F, 1.F,                                 // objectness 0
-                  std::nanf(""), 10, 4, 4, 1.F, 1.F, 1.F);                     // NaN box
+                  10, 10, 4, 4, 0.F, 1.F, 1.F,                                // objectness 0
+                  std::nanf(""), 10, 4, 4, 1.F, 1.F, 1.F);                    // NaN box
   const std::vector<int> shape{1, 3, 7};
   const cv::Mat blob = rows.reshape(1, shape);
   const auto candidates = decodeYoloOutputs({blob}, YoloOutputLayout::kPixels, {416, 416}, 2, 0.3);
@@ -482,21 +489,21 @@ TEST(DecodeTest, PixelLayoutMultipliesObjectnessAndSkipsBadRows)
   EXPECT_DOUBLE_EQ(candidates[0].box.width, 20.0);
   EXPECT_DOUBLE_EQ(candidates[0].box.height, 10.0);
   // The same row read as OpenCV's region layout: normalised box, class column is the score.
-  const auto region = decodeYoloOutputs({rows.row(0).clone()}, YoloOutputLayout::kOpenCvRegion, {100, 200}, 2, 0.3);
+  const auto region =
+      decodeYoloOutputs({rows.row(0).clone()}, YoloOutputLayout::kOpenCvRegion, {100, 200}, 2, 0.3);
   ASSERT_EQ(region.size(), 1U);
   EXPECT_FLOAT_EQ(region[0].score, 0.9F);
   EXPECT_DOUBLE_EQ(region[0].box.x, 50 * 100 - 20 * 100 / 2.0);
-  EXPECT_THROW(decodeYoloOutputs({rows}, YoloOutputLayout::kPixels, {416, 416}, 3, 0.3), std::invalid_argument);
+  EXPECT_THROW(decodeYoloOutputs({rows}, YoloOutputLayout::kPixels, {416, 416}, 3, 0.3),
+               std::invalid_argument);
 }
 
 TEST(DecodeTest, SuppressionIsPerClass)
 {
   // Class 0: two boxes with IoU 0.6 (the weaker goes) and a disjoint one; class 1: a box equal
   // to the strongest class-0 box (stays).
-  const std::vector<YoloCandidate> candidates{{0, 0.9F, {0, 0, 4, 2}},
-                                              {0, 0.8F, {1, 0, 4, 2}},
-                                              {0, 0.7F, {10, 10, 4, 2}},
-                                              {1, 0.5F, {0, 0, 4, 2}}};
+  const std::vector<YoloCandidate> candidates{
+      {0, 0.9F, {0, 0, 4, 2}}, {0, 0.8F, {1, 0, 4, 2}}, {0, 0.7F, {10, 10, 4, 2}}, {1, 0.5F, {0, 0, 4, 2}}};
   const auto kept = suppressPerClass(candidates, 0.3, 0.45);
   ASSERT_EQ(kept.size(), 3U);
   EXPECT_FLOAT_EQ(kept[0].score, 0.9F);
@@ -530,14 +537,15 @@ TEST(Yolov4StyleTest, MishGroupedRouteAndScaleXYLoadAndRun)
   // concatenating route, scale_x_y in [yolo]. Random weights of the exact size the cfg needs.
   const std::string dir = test::makeTempDirectory();
   const std::string cfg = dir + "/v4.cfg";
-  std::ofstream(cfg) << "[net]\nwidth=32\nheight=32\nchannels=3\n"
-                        "[convolutional]\nbatch_normalize=1\nfilters=8\nsize=3\nstride=2\npad=1\nactivation=mish\n"
-                        "[route]\nlayers=-1\ngroups=2\ngroup_id=1\n"
-                        "[convolutional]\nbatch_normalize=1\nfilters=4\nsize=3\nstride=1\npad=1\nactivation=leaky\n"
-                        "[route]\nlayers=-1,-3\n"
-                        "[maxpool]\nsize=2\nstride=2\n"
-                        "[convolutional]\nfilters=12\nsize=1\nstride=1\npad=1\nactivation=linear\n"
-                        "[yolo]\nmask=0\nanchors=10,14\nclasses=7\nnum=1\nscale_x_y=1.05\n";
+  std::ofstream(cfg)
+      << "[net]\nwidth=32\nheight=32\nchannels=3\n"
+         "[convolutional]\nbatch_normalize=1\nfilters=8\nsize=3\nstride=2\npad=1\nactivation=mish\n"
+         "[route]\nlayers=-1\ngroups=2\ngroup_id=1\n"
+         "[convolutional]\nbatch_normalize=1\nfilters=4\nsize=3\nstride=1\npad=1\nactivation=leaky\n"
+         "[route]\nlayers=-1,-3\n"
+         "[maxpool]\nsize=2\nstride=2\n"
+         "[convolutional]\nfilters=12\nsize=1\nstride=1\npad=1\nactivation=linear\n"
+         "[yolo]\nmask=0\nanchors=10,14\nclasses=7\nnum=1\nscale_x_y=1.05\n";
   std::ofstream names(dir + "/v4.names");
   for (int c = 0; c < 7; ++c)
   {

@@ -66,21 +66,27 @@ std::string errorOf(const std::string& text)
 
 TEST(KittiLabelsTest, MalformedLinesNameFileLineAndField)
 {
-  const std::string good = "Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n";
+  const std::string good =
+      "Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n";
   EXPECT_EQ(errorOf(good + "\n" + good), "");
   const std::string short_line = errorOf(good + "Car 0 0 1 2 3\n");
   EXPECT_EQ(short_line.rfind("frame.txt:2: ", 0), 0U) << short_line;
   EXPECT_NE(short_line.find("got 6"), std::string::npos) << short_line;
-  const std::string bad_number = errorOf("Car 0.00 0 1.85 387.63 18x.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
+  const std::string bad_number =
+      errorOf("Car 0.00 0 1.85 387.63 18x.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
   EXPECT_NE(bad_number.find("frame.txt:1: field 6 (top)"), std::string::npos) << bad_number;
   EXPECT_NE(bad_number.find("18x.54"), std::string::npos) << bad_number;
-  const std::string bad_occlusion = errorOf("Car 0.00 0.5 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
+  const std::string bad_occlusion =
+      errorOf("Car 0.00 0.5 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
   EXPECT_NE(bad_occlusion.find("field 3 (occluded)"), std::string::npos) << bad_occlusion;
-  const std::string nan_value = errorOf("Car 0.00 0 nan 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
+  const std::string nan_value =
+      errorOf("Car 0.00 0 nan 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
   EXPECT_NE(nan_value.find("alpha"), std::string::npos) << nan_value;
-  const std::string bad_score = errorOf("Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57 high\n");
+  const std::string bad_score =
+      errorOf("Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57 high\n");
   EXPECT_NE(bad_score.find("score"), std::string::npos) << bad_score;
-  const std::string swapped = errorOf("Car 0.00 0 1.85 423.81 181.54 387.63 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
+  const std::string swapped =
+      errorOf("Car 0.00 0 1.85 423.81 181.54 387.63 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n");
   EXPECT_NE(swapped.find("right < left"), std::string::npos) << swapped;
   const std::string too_long = errorOf("Car 0 0 1 2 3 4 5 6 7 8 9 10 11 12 13 14\n");
   EXPECT_NE(too_long.find("got 17"), std::string::npos) << too_long;

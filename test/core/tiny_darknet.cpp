@@ -29,7 +29,8 @@ std::string className(int c)
 
 void writeFloats(std::ofstream& out, const std::vector<float>& values)
 {
-  out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
+  out.write(reinterpret_cast<const char*>(values.data()),
+            static_cast<std::streamsize>(values.size() * sizeof(float)));
 }
 
 }  // namespace
@@ -64,12 +65,14 @@ TinyDarknetFiles writeTinyDarknet(const std::string& directory, const TinyDarkne
 
   std::ofstream cfg(files.cfg);
   cfg << "# Tiny YOLO test model written by test/core/tiny_darknet.cpp\n"
-      << "[net]\nbatch=1\nsubdivisions=1\nwidth=" << spec.width << "\nheight=" << spec.height << "\nchannels=3\n\n"
+      << "[net]\nbatch=1\nsubdivisions=1\nwidth=" << spec.width << "\nheight=" << spec.height
+      << "\nchannels=3\n\n"
       << "[convolutional]\n"
       << (spec.batch_normalize ? "batch_normalize=1\n" : "") << "filters=" << filters
       << "\nsize=1\nstride=1\npad=0\nactivation=linear\n\n"
-      << "[yolo]\nmask=0,1,2\nanchors=" << spec.anchor_w << "," << spec.anchor_h << ", 1,1, 1,1\nclasses="
-      << spec.num_classes << "\nnum=3\njitter=.3\nignore_thresh=.7\ntruth_thresh=1\nrandom=0\n";
+      << "[yolo]\nmask=0,1,2\nanchors=" << spec.anchor_w << "," << spec.anchor_h
+      << ", 1,1, 1,1\nclasses=" << spec.num_classes
+      << "\nnum=3\njitter=.3\nignore_thresh=.7\ntruth_thresh=1\nrandom=0\n";
   if (!cfg)
   {
     throw std::runtime_error("cannot write " + files.cfg);

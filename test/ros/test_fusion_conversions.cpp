@@ -15,8 +15,8 @@ ProjectedGrid makeGrid(std::size_t n)
   grid.header.stamp = ros::Time(100, 5);
   grid.header.frame_id = "camera_color_left";
   grid.grid_frame_id = "world";
-  for (auto* array : {&grid.u, &grid.v, &grid.depth, &grid.x, &grid.y, &grid.vx, &grid.vy,
-                      &grid.p_static, &grid.p_dynamic})
+  for (auto* array :
+       {&grid.u, &grid.v, &grid.depth, &grid.x, &grid.y, &grid.vx, &grid.vy, &grid.p_static, &grid.p_dynamic})
   {
     array->assign(n, 1.F);
   }

@@ -46,7 +46,7 @@ namespace fs = std::filesystem;
 const std::string kDay = std::string(GVF_TEST_DATA_DIR) + "/kitti_raw_2011_09_26";
 const std::string kDrive = kDay + "/2011_09_26_drive_0001_sync";
 constexpr int kFrames = 5;
-constexpr int kWidth = 1242;   // S_rect_0i of 2011_09_26
+constexpr int kWidth = 1242;  // S_rect_0i of 2011_09_26
 constexpr int kHeight = 375;
 
 std::string indexName(int frame, const char* extension)
@@ -85,7 +85,8 @@ protected:
     }
     for (int frame = 0; frame < kFrames; ++frame)
     {
-      copy(kDrive + "/oxts/data/" + indexName(frame, ".txt"), drive_ + "/oxts/data/" + indexName(frame, ".txt"));
+      copy(kDrive + "/oxts/data/" + indexName(frame, ".txt"),
+           drive_ + "/oxts/data/" + indexName(frame, ".txt"));
       writeScan(drive_ + "/velodyne_points/data/" + indexName(frame, ".bin"), scanPoints(frame));
       for (int camera = 0; camera < 4; ++camera)
       {
@@ -119,7 +120,8 @@ protected:
   /// grey images: 0, that pixel 200.
   void writeImage(int camera, int frame) const
   {
-    const std::string path = drive_ + "/image_0" + std::to_string(camera) + "/data/" + indexName(frame, ".png");
+    const std::string path =
+        drive_ + "/image_0" + std::to_string(camera) + "/data/" + indexName(frame, ".png");
     if (camera < 2)
     {
       cv::Mat image(kHeight, kWidth, CV_8UC1, cv::Scalar(0));
@@ -221,10 +223,14 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
   EXPECT_EQ(progress.back(), Progress(5, 5));
 
   const auto bag = readBag();
-  const std::map<std::string, std::size_t> expected_counts = {
-      {"/tf_static", 1U},  {"/tf", 5U}, {"/kitti/oxts/imu", 5U}, {"/kitti/oxts/gps/fix", 5U},
-      {"/kitti/oxts/gps/vel", 5U}, {"/kitti/velo/pointcloud", 5U}, {"/kitti/camera_color_left/image_raw", 5U},
-      {"/kitti/camera_color_left/camera_info", 5U}};
+  const std::map<std::string, std::size_t> expected_counts = {{"/tf_static", 1U},
+                                                              {"/tf", 5U},
+                                                              {"/kitti/oxts/imu", 5U},
+                                                              {"/kitti/oxts/gps/fix", 5U},
+                                                              {"/kitti/oxts/gps/vel", 5U},
+                                                              {"/kitti/velo/pointcloud", 5U},
+                                                              {"/kitti/camera_color_left/image_raw", 5U},
+                                                              {"/kitti/camera_color_left/camera_info", 5U}};
   ASSERT_EQ(bag.size(), expected_counts.size());
   for (const auto& [topic, count] : expected_counts)
   {
@@ -266,7 +272,8 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
     EXPECT_EQ(img->header.stamp, image[k]);
     EXPECT_EQ(img->header.frame_id, "camera_color_left");
     EXPECT_EQ(img->header.seq, k);
-    const auto info = bag.at("/kitti/camera_color_left/camera_info")[k].instantiate<sensor_msgs::CameraInfo>();
+    const auto info =
+        bag.at("/kitti/camera_color_left/camera_info")[k].instantiate<sensor_msgs::CameraInfo>();
     EXPECT_EQ(info->header.stamp, image[k]);
     EXPECT_EQ(info->header.frame_id, "camera_color_left");
     EXPECT_EQ(info->header.seq, k);
@@ -284,7 +291,8 @@ TEST_F(KittiDriveFixture, OxtsMessagesCarryTheRecordValues)
   convertKittiDrive(options());
   const auto bag = readBag();
   const OxtsRecord record = parseOxtsLine(
-      [&] {
+      [&]
+      {
         std::ifstream file(kDrive + "/oxts/data/" + indexName(1, ".txt"));
         std::string line;
         std::getline(file, line);
@@ -385,13 +393,14 @@ TEST_F(KittiDriveFixture, CameraInfoCarriesTheRectifiedModel)
   convertKittiDrive(options());
   const auto info =
       readBag().at("/kitti/camera_color_left/camera_info")[0].instantiate<sensor_msgs::CameraInfo>();
-  EXPECT_EQ(info->width, 1242U);   // S_rect_02
+  EXPECT_EQ(info->width, 1242U);  // S_rect_02
   EXPECT_EQ(info->height, 375U);
   EXPECT_EQ(info->distortion_model, "plumb_bob");
   EXPECT_EQ(info->D, std::vector<double>(5, 0.0));
   const std::array<double, 9> k = {7.215377e+02, 0, 6.095593e+02, 0, 7.215377e+02, 1.728540e+02, 0, 0, 1};
   const std::array<double, 9> r = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  const std::array<double, 12> p = {7.215377e+02, 0, 6.095593e+02, 0, 0, 7.215377e+02, 1.728540e+02, 0, 0, 0, 1, 0};
+  const std::array<double, 12> p = {
+      7.215377e+02, 0, 6.095593e+02, 0, 0, 7.215377e+02, 1.728540e+02, 0, 0, 0, 1, 0};
   for (std::size_t i = 0; i < 9; ++i)
   {
     EXPECT_DOUBLE_EQ(info->K[i], k[i]) << "K[" << i << "]";
@@ -507,7 +516,8 @@ TEST_F(KittiDriveFixture, FrameRangeAndCamerasAreOptions)
   // The right colour camera sits 0.47 m left of camera 0 (P_rect_03: tx = −339.5242 px / fx).
   tf2::BufferCore buffer;
   feedStatic(buffer, bag.at("/tf_static"));
-  const auto right_from_left = buffer.lookupTransform("camera_color_right", "camera_color_left", ros::Time(0));
+  const auto right_from_left =
+      buffer.lookupTransform("camera_color_right", "camera_color_left", ros::Time(0));
   EXPECT_NEAR(right_from_left.transform.translation.x, (-3.395242e+02 - 4.485728e+01) / 7.215377e+02, 1e-4);
   const auto info = bag.at("/kitti/camera_color_right/camera_info")[0].instantiate<sensor_msgs::CameraInfo>();
   EXPECT_EQ(info->header.frame_id, "camera_color_right");

@@ -161,7 +161,8 @@ TEST(YamlParamSource, ThePackageConfigFilesGiveTheConfigsTheyDocument)
 TEST(YamlParamSource, ConfigFunctionsRefuseBadValuesNamingTheParameter)
 {
   const YamlParamSource grid = YamlParamSource::fromString("seed: -1\n", "grid.yaml");
-  EXPECT_NE(invalidArgument([&] { dynamicGridConfigFromParams(grid); }).find("grid.yaml:seed"), std::string::npos);
+  EXPECT_NE(invalidArgument([&] { dynamicGridConfigFromParams(grid); }).find("grid.yaml:seed"),
+            std::string::npos);
   const YamlParamSource wrong = YamlParamSource::fromString("particle_count: many\n", "grid.yaml");
   EXPECT_NE(invalidArgument([&] { dynamicGridConfigFromParams(wrong); }).find("grid.yaml:particle_count"),
             std::string::npos);
@@ -173,8 +174,9 @@ TEST(YamlParamSource, ConfigFunctionsRefuseBadValuesNamingTheParameter)
             std::string::npos);
   const YamlParamSource det = YamlParamSource::fromString("backend: magic\n", "det.yaml");
   const YamlParamSource empty("empty.yaml");
-  EXPECT_NE(invalidArgument([&] { pipelineConfigFromParams(empty, det, empty, empty); }).find("det.yaml:backend"),
-            std::string::npos);
+  EXPECT_NE(
+      invalidArgument([&] { pipelineConfigFromParams(empty, det, empty, empty); }).find("det.yaml:backend"),
+      std::string::npos);
 }
 
 }  // namespace

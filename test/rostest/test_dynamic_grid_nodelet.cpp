@@ -25,7 +25,6 @@ namespace
 using test::waitFor;
 constexpr char kLidarFrame[] = "velodyne";
 
-
 constexpr double kWallX = 11.05;  // world x of a static wall, 6 m wide
 
 // The scan of the lidar at world x = `lidar_x` (1.73 m above the ground): ground rings around

@@ -11,8 +11,8 @@
 #include <cmath>
 #include <functional>
 
-#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "wait_for.h"
 
@@ -23,7 +23,6 @@ namespace
 using test::waitFor;
 constexpr std::uint32_t kWidth = 640;
 constexpr std::uint32_t kHeight = 480;
-
 
 Detection2D makeBox(std::uint32_t class_id, const std::string& label, float score, float x_min, float y_min,
                     float x_max, float y_max)
@@ -69,8 +68,9 @@ protected:
   {
     sub_objects_ = nh_.subscribe<DetectedObjectArray>(
         "objects", 10, [this](const DetectedObjectArray::ConstPtr& msg) { received_.push_back(msg); });
-    ASSERT_TRUE(waitFor([this] { return pub_detections_.getNumSubscribers() > 0 && pub_grid_.getNumSubscribers() > 0; },
-                        10.0))
+    ASSERT_TRUE(waitFor(
+        [this] { return pub_detections_.getNumSubscribers() > 0 && pub_grid_.getNumSubscribers() > 0; },
+        10.0))
         << "the fusion nodelet did not subscribe its inputs";
   }
 
@@ -149,8 +149,9 @@ TEST_F(FusionNodeletTest, LazyWhileNobodyListens)
   subscribeObjects();
   EXPECT_EQ(pub_image_.getNumSubscribers(), 0U) << "image subscribed without an overlay subscriber";
   sub_objects_.shutdown();
-  EXPECT_TRUE(waitFor([this] { return pub_detections_.getNumSubscribers() == 0 && pub_grid_.getNumSubscribers() == 0; },
-                      10.0))
+  EXPECT_TRUE(waitFor(
+      [this] { return pub_detections_.getNumSubscribers() == 0 && pub_grid_.getNumSubscribers() == 0; },
+      10.0))
       << "inputs still subscribed after the last output subscriber left";
 }
 
@@ -230,7 +231,8 @@ TEST_F(FusionNodeletTest, EmptyInputStillPublishes)
   grid->state.clear();
   pub_detections_.publish(makeDetections(stamp2));
   pub_grid_.publish(grid);
-  ASSERT_TRUE(waitFor([this] { return received_.size() >= 2; }, 10.0)) << "silence for an image without points";
+  ASSERT_TRUE(waitFor([this] { return received_.size() >= 2; }, 10.0))
+      << "silence for an image without points";
   EXPECT_EQ(received_[1]->header.stamp, stamp2);
   EXPECT_TRUE(received_[1]->objects.empty());
 }
@@ -284,11 +286,12 @@ TEST_F(FusionNodeletTest, MarkersAndOverlay)
   std::vector<visualization_msgs::MarkerArray::ConstPtr> markers;
   std::vector<sensor_msgs::Image::ConstPtr> overlays;
   ros::Subscriber sub_markers = nh_.subscribe<visualization_msgs::MarkerArray>(
-      "objects/markers", 10, [&](const visualization_msgs::MarkerArray::ConstPtr& m) { markers.push_back(m); });
+      "objects/markers", 10,
+      [&](const visualization_msgs::MarkerArray::ConstPtr& m) { markers.push_back(m); });
   ros::Subscriber sub_overlay = nh_.subscribe<sensor_msgs::Image>(
       "objects/image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { overlays.push_back(m); });
-  ASSERT_TRUE(waitFor([this] { return pub_image_.getNumSubscribers() > 0 && pub_detections_.getNumSubscribers() > 0; },
-                      10.0))
+  ASSERT_TRUE(waitFor(
+      [this] { return pub_image_.getNumSubscribers() > 0 && pub_detections_.getNumSubscribers() > 0; }, 10.0))
       << "an overlay subscriber must make the nodelet subscribe the image";
 
   const ros::Time stamp(1317000020, 500);
@@ -323,7 +326,8 @@ TEST_F(FusionNodeletTest, MarkersAndOverlay)
   EXPECT_EQ(overlay.encoding, sensor_msgs::image_encodings::BGR8);
   ASSERT_EQ(overlay.width, kWidth);
   ASSERT_EQ(overlay.height, kHeight);
-  auto pixel = [&](int u, int v) {
+  auto pixel = [&](int u, int v)
+  {
     const std::size_t i = static_cast<std::size_t>(v) * overlay.step + static_cast<std::size_t>(u) * 3;
     return std::array<int, 3>{overlay.data[i], overlay.data[i + 1], overlay.data[i + 2]};
   };

@@ -32,7 +32,6 @@ constexpr double kCy = 240.0;
 constexpr double kCameraHeight = 1.5;  // camera_optical is 1.5 m above the grid origin, looking along +x
 constexpr double kPixelTolerance = 0.01;
 
-
 /// Expected pixel of world ground point (x, y, 0) for the test camera: optical x = −y,
 /// optical y = 1.5 m − z, optical z = x.
 std::array<double, 2> expectedPixel(double x, double y)
@@ -56,8 +55,8 @@ protected:
   {
     sub_projected_ = nh_.subscribe<ProjectedGrid>(
         "projected_grid", 10, [this](const ProjectedGrid::ConstPtr& msg) { received_.push_back(msg); });
-    ASSERT_TRUE(waitFor([this] { return pub_grid_.getNumSubscribers() > 0 && pub_info_.getNumSubscribers() > 0; },
-                        10.0))
+    ASSERT_TRUE(waitFor(
+        [this] { return pub_grid_.getNumSubscribers() > 0 && pub_info_.getNumSubscribers() > 0; }, 10.0))
         << "the nodelet did not subscribe its inputs";
   }
 
@@ -82,11 +81,11 @@ protected:
     grid->vy.assign(n, 0.0F);
     grid->v_var_x.assign(n, 0.0F);
     grid->v_var_y.assign(n, 0.0F);
-    setCell(*grid, 18.1, -2.1, 0.9F, 0.05F, 0.F);  // B: static, in view
-    setCell(*grid, 0.1, 0.1, 0.9F, 0.05F, 0.F);    // D: 0.1 m ahead, nearer than min_depth
-    setCell(*grid, 10.1, 0.1, 0.9F, 0.05F, 0.F);   // A: static, in view
+    setCell(*grid, 18.1, -2.1, 0.9F, 0.05F, 0.F);   // B: static, in view
+    setCell(*grid, 0.1, 0.1, 0.9F, 0.05F, 0.F);     // D: 0.1 m ahead, nearer than min_depth
+    setCell(*grid, 10.1, 0.1, 0.9F, 0.05F, 0.F);    // A: static, in view
     setCell(*grid, 15.1, 1.1, 0.05F, 0.9F, -10.F);  // C: dynamic, approaching at 10 m/s
-    setCell(*grid, 10.1, 9.9, 0.9F, 0.05F, 0.F);   // E: far left, outside the image
+    setCell(*grid, 10.1, 9.9, 0.9F, 0.05F, 0.F);    // E: far left, outside the image
     return grid;
   }
 
@@ -102,7 +101,8 @@ protected:
     grid.vx[i] = vx;
   }
 
-  static sensor_msgs::CameraInfo::Ptr makeInfo(const ros::Time& stamp, const std::string& frame = "camera_optical")
+  static sensor_msgs::CameraInfo::Ptr makeInfo(const ros::Time& stamp,
+                                               const std::string& frame = "camera_optical")
   {
     auto info = boost::make_shared<sensor_msgs::CameraInfo>();
     info->header.stamp = stamp;
@@ -122,7 +122,8 @@ protected:
                             double timeout_s = 10.0)
   {
     return waitFor(
-        [&] {
+        [&]
+        {
           for (const auto& msg : received_)
           {
             if (msg->header.stamp == info->header.stamp)
@@ -133,7 +134,8 @@ protected:
           return false;
         },
         timeout_s,
-        [&] {
+        [&]
+        {
           pub_grid_.publish(grid);
           ros::WallDuration(0.02).sleep();
           pub_info_.publish(info);
@@ -157,7 +159,8 @@ TEST_F(GridProjectionNodeletTest, LazyInputs)
   ros::WallDuration(0.3).sleep();
   EXPECT_EQ(pub_image_.getNumSubscribers(), 0U) << "image subscribed without an overlay subscriber";
   {
-    const boost::function<void(const sensor_msgs::Image::ConstPtr&)> ignore = [](const sensor_msgs::Image::ConstPtr&) {};
+    const boost::function<void(const sensor_msgs::Image::ConstPtr&)> ignore =
+        [](const sensor_msgs::Image::ConstPtr&) {};
     ros::Subscriber overlay = nh_.subscribe<sensor_msgs::Image>("projected_grid/image", 1, ignore);
     EXPECT_TRUE(waitFor([this] { return pub_image_.getNumSubscribers() > 0; }, 10.0))
         << "an overlay subscriber must make the nodelet subscribe the image";
@@ -166,8 +169,8 @@ TEST_F(GridProjectionNodeletTest, LazyInputs)
       << "image still subscribed after the overlay subscriber left";
   EXPECT_GT(pub_grid_.getNumSubscribers(), 0U);
   sub_projected_.shutdown();
-  EXPECT_TRUE(waitFor([this] { return pub_grid_.getNumSubscribers() == 0 && pub_info_.getNumSubscribers() == 0; },
-                      10.0))
+  EXPECT_TRUE(waitFor(
+      [this] { return pub_grid_.getNumSubscribers() == 0 && pub_info_.getNumSubscribers() == 0; }, 10.0))
       << "inputs still subscribed after the last output subscriber left";
 }
 
@@ -176,7 +179,8 @@ TEST_F(GridProjectionNodeletTest, KnownCellsLandOnTheirPixels)
   subscribeProjected();
   const ros::Time image_stamp(1317000000, 500000000);
   const ros::Time grid_stamp = image_stamp - ros::Duration(0.05);
-  ASSERT_TRUE(projectUntilReceived(makeGrid(grid_stamp), makeInfo(image_stamp))) << "no projected_grid published";
+  ASSERT_TRUE(projectUntilReceived(makeGrid(grid_stamp), makeInfo(image_stamp)))
+      << "no projected_grid published";
   const ProjectedGrid& msg = *received_.front();
   EXPECT_EQ(msg.header.stamp, image_stamp);
   EXPECT_EQ(msg.header.frame_id, "camera_optical");
@@ -273,7 +277,8 @@ TEST_F(GridProjectionNodeletTest, CameraInfoBeforeItsTfWaitsAndIsProjected)
   const auto grid = makeGrid(stamp - ros::Duration(0.05));
   // Make sure the grid is there first (a camera_info before any grid is refused).
   ASSERT_TRUE(projectUntilReceived(grid, makeInfo(stamp - ros::Duration(0.03))));
-  const auto late = [this, stamp] {
+  const auto late = [this, stamp]
+  {
     std::vector<ProjectedGrid::ConstPtr> out;
     for (const auto& msg : received_)
     {
@@ -305,10 +310,13 @@ TEST_F(GridProjectionNodeletTest, CameraInfoBeforeItsTfWaitsAndIsProjected)
     camera.transform.rotation.w = 0.5;
     transforms.push_back(camera);
   }
-  ASSERT_TRUE(waitFor([&] { return !late().empty(); }, 10.0, [&] {
-    broadcaster.sendTransform(transforms);
-    ros::WallDuration(0.05).sleep();
-  })) << "the camera_info waiting for its tf was never projected";
+  ASSERT_TRUE(waitFor([&] { return !late().empty(); }, 10.0,
+                      [&]
+                      {
+                        broadcaster.sendTransform(transforms);
+                        ros::WallDuration(0.05).sleep();
+                      }))
+      << "the camera_info waiting for its tf was never projected";
   ros::WallDuration(0.3).sleep();
   ros::spinOnce();
   const auto projected = late();
@@ -325,8 +333,8 @@ TEST_F(GridProjectionNodeletTest, OverlayShowsStaticBlueAndDynamicGreen)
   std::vector<sensor_msgs::Image::ConstPtr> overlays;
   ros::Subscriber sub_overlay = nh_.subscribe<sensor_msgs::Image>(
       "projected_grid/image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { overlays.push_back(m); });
-  ASSERT_TRUE(waitFor([this] { return pub_image_.getNumSubscribers() > 0 && pub_info_.getNumSubscribers() > 0; },
-                      10.0));
+  ASSERT_TRUE(waitFor(
+      [this] { return pub_image_.getNumSubscribers() > 0 && pub_info_.getNumSubscribers() > 0; }, 10.0));
   const ros::Time stamp(1317000200, 250);
   auto image = boost::make_shared<sensor_msgs::Image>();
   image->header.stamp = stamp;
@@ -338,18 +346,22 @@ TEST_F(GridProjectionNodeletTest, OverlayShowsStaticBlueAndDynamicGreen)
   image->data.assign(image->step * kHeight, 0);
   const auto grid = makeGrid(stamp - ros::Duration(0.05));
   const auto info = makeInfo(stamp);
-  ASSERT_TRUE(waitFor([&] { return !overlays.empty(); }, 10.0, [&] {
-    pub_image_.publish(image);
-    pub_grid_.publish(grid);
-    ros::WallDuration(0.02).sleep();
-    pub_info_.publish(info);
-  })) << "no overlay published";
+  ASSERT_TRUE(waitFor([&] { return !overlays.empty(); }, 10.0,
+                      [&]
+                      {
+                        pub_image_.publish(image);
+                        pub_grid_.publish(grid);
+                        ros::WallDuration(0.02).sleep();
+                        pub_info_.publish(info);
+                      }))
+      << "no overlay published";
   const sensor_msgs::Image& overlay = *overlays.front();
   EXPECT_EQ(overlay.header.stamp, stamp);
   EXPECT_EQ(overlay.encoding, sensor_msgs::image_encodings::BGR8);
   ASSERT_EQ(overlay.width, kWidth);
   ASSERT_EQ(overlay.height, kHeight);
-  auto pixel = [&](double u, double v) {
+  auto pixel = [&](double u, double v)
+  {
     const std::size_t i = static_cast<std::size_t>(v) * overlay.step + static_cast<std::size_t>(u) * 3;
     return std::array<int, 3>{overlay.data[i], overlay.data[i + 1], overlay.data[i + 2]};
   };

@@ -33,17 +33,20 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
 
   std::mutex mutex;
   std::vector<DetectedObjectArray::ConstPtr> received;
-  ros::Subscriber sub = nh.subscribe<DetectedObjectArray>("/objects", 100, [&](const DetectedObjectArray::ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(mutex);
-    received.push_back(m);
-  });
+  ros::Subscriber sub = nh.subscribe<DetectedObjectArray>("/objects", 100,
+                                                          [&](const DetectedObjectArray::ConstPtr& m)
+                                                          {
+                                                            std::lock_guard<std::mutex> lock(mutex);
+                                                            received.push_back(m);
+                                                          });
   // The bag is played with a start delay; wait for its end (the last frame's objects or a
   // pause of 8 s once objects came).
   const ros::Time last_stamp(drive.stamps.back().sec, drive.stamps.back().nsec);
   ros::WallTime last_arrival = ros::WallTime::now();
   std::size_t count = 0;
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         std::lock_guard<std::mutex> lock(mutex);
         if (received.size() != count)
         {
@@ -92,8 +95,8 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
   ::testing::Test::RecordProperty("right", static_cast<int>(right));
   ASSERT_GE(matched, 40U) << "too few objects matched the ground truth";
   EXPECT_GE(static_cast<double>(right), 0.8 * static_cast<double>(matched))
-      << "static->static " << c[kS][kS] << ", static->dynamic " << c[kS][kD] << ", dynamic->dynamic " << c[kD][kD]
-      << ", dynamic->static " << c[kD][kS];
+      << "static->static " << c[kS][kS] << ", static->dynamic " << c[kS][kD] << ", dynamic->dynamic "
+      << c[kD][kD] << ", dynamic->static " << c[kD][kS];
   // Both kinds are mostly right on their own.
   EXPECT_GE(c[kS][kS], 4 * c[kS][kD]) << "parked objects called dynamic";
   EXPECT_GE(c[kD][kD], c[kD][kS]) << "moving objects called static";

@@ -171,22 +171,30 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
   }
 
   ChainOutputs out;
-  auto sub_grid = nh.subscribe<DynamicGrid>("grid", 100, [&](const DynamicGrid::ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(out.mutex);
-    out.grids.insert(m->header.stamp);
-  });
-  auto sub_det = nh.subscribe<Detection2DArray>("detections", 100, [&](const Detection2DArray::ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(out.mutex);
-    out.detections.insert(m->header.stamp);
-  });
-  auto sub_proj = nh.subscribe<ProjectedGrid>("projected_grid", 100, [&](const ProjectedGrid::ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(out.mutex);
-    out.projections.insert(m->header.stamp);
-  });
-  auto sub_obj = nh.subscribe<DetectedObjectArray>("objects", 100, [&](const DetectedObjectArray::ConstPtr& m) {
-    std::lock_guard<std::mutex> lock(out.mutex);
-    out.objects[m->header.stamp] = m;
-  });
+  auto sub_grid = nh.subscribe<DynamicGrid>("grid", 100,
+                                            [&](const DynamicGrid::ConstPtr& m)
+                                            {
+                                              std::lock_guard<std::mutex> lock(out.mutex);
+                                              out.grids.insert(m->header.stamp);
+                                            });
+  auto sub_det = nh.subscribe<Detection2DArray>("detections", 100,
+                                                [&](const Detection2DArray::ConstPtr& m)
+                                                {
+                                                  std::lock_guard<std::mutex> lock(out.mutex);
+                                                  out.detections.insert(m->header.stamp);
+                                                });
+  auto sub_proj = nh.subscribe<ProjectedGrid>("projected_grid", 100,
+                                              [&](const ProjectedGrid::ConstPtr& m)
+                                              {
+                                                std::lock_guard<std::mutex> lock(out.mutex);
+                                                out.projections.insert(m->header.stamp);
+                                              });
+  auto sub_obj = nh.subscribe<DetectedObjectArray>("objects", 100,
+                                                   [&](const DetectedObjectArray::ConstPtr& m)
+                                                   {
+                                                     std::lock_guard<std::mutex> lock(out.mutex);
+                                                     out.objects[m->header.stamp] = m;
+                                                   });
 
   // The bag's messages, published as rosbag play does (ShapeShifter: the bytes as recorded,
   // header.seq included) on the chain's input topics.
@@ -241,10 +249,15 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
   for (const rosbag::MessageInstance& m : view)
   {
     const std::string& t = m.getTopic();
-    const int rank = t == topics.tf_static ? 0 : t == topics.tf ? 1 : t == topics.points ? 2 : t == topics.image ? 3 : 4;
+    const int rank = t == topics.tf_static ? 0
+                     : t == topics.tf      ? 1
+                     : t == topics.points  ? 2
+                     : t == topics.image   ? 3
+                                           : 4;
     items.push_back({m.getTime(), rank, items.size(), std::make_shared<const rosbag::MessageInstance>(m)});
   }
-  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b)
+  std::stable_sort(items.begin(), items.end(),
+                   [](const Item& a, const Item& b)
                    { return a.stamp != b.stamp ? a.stamp < b.stamp : a.rank < b.rank; });
   std::set<ros::Time> image_stamps;
   for (const Item& item : items)
@@ -269,7 +282,8 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
     else if (topic == topics.camera_info)
     {
       ros::Time stamp = item.message->instantiate<sensor_msgs::CameraInfo>()->header.stamp;
-      if (test::waitFor([&] { return out.has(out.projections, stamp); }, 3.0) && out.has(out.detections, stamp))
+      if (test::waitFor([&] { return out.has(out.projections, stamp); }, 3.0) &&
+          out.has(out.detections, stamp))
       {
         EXPECT_TRUE(test::waitFor(
             [&]
@@ -322,8 +336,8 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
   }
   EXPECT_GE(compared_frames, image_stamps.size() - 1);
   EXPECT_GT(compared_objects, 2 * compared_frames / 2);  // objects were really compared
-  std::cout << "compared " << compared_objects << " objects (" << dynamic << " dynamic) in " << compared_frames
-            << " frames\n";
+  std::cout << "compared " << compared_objects << " objects (" << dynamic << " dynamic) in "
+            << compared_frames << " frames\n";
 }
 
 }  // namespace

@@ -25,7 +25,6 @@ namespace
 using test::waitFor;
 std::string g_model_dir;
 
-
 bool loadNodelet(const std::string& name, const std::string& prefix)
 {
   nodelet::NodeletLoad load;
@@ -42,7 +41,8 @@ bool loadNodelet(const std::string& name, const std::string& prefix)
 
 /// A 64 × 32 image of encoding `encoding` (rgb8 or bgr8), black but for a red 4×4 block at
 /// x ∈ [20, 24), y ∈ [8, 12).
-sensor_msgs::Image::Ptr redBlockImage(const std::string& encoding, const ros::Time& stamp, bool with_block = true)
+sensor_msgs::Image::Ptr redBlockImage(const std::string& encoding, const ros::Time& stamp,
+                                      bool with_block = true)
 {
   auto image = boost::make_shared<sensor_msgs::Image>();
   image->header.stamp = stamp;
@@ -70,7 +70,8 @@ protected:
   {
     pub_image_ = nh_.advertise<sensor_msgs::Image>("/tiny/image", 10);
     sub_diagnostics_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
-        "/diagnostics", 50, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(m); });
+        "/diagnostics", 50,
+        [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics_.push_back(m); });
   }
 
   void subscribeDetections()
@@ -156,7 +157,8 @@ TEST_F(YoloDetectorNodeletTest, UnsupportedEncodingIsSkippedAndCounted)
   EXPECT_EQ(received_.front()->header.stamp, good);
 
   // Diagnostics count the frames and report the inference time.
-  auto find_status = [this]() -> const diagnostic_msgs::DiagnosticStatus* {
+  auto find_status = [this]() -> const diagnostic_msgs::DiagnosticStatus*
+  {
     for (auto it = diagnostics_.rbegin(); it != diagnostics_.rend(); ++it)
     {
       for (const auto& status : (*it)->status)
@@ -174,7 +176,8 @@ TEST_F(YoloDetectorNodeletTest, UnsupportedEncodingIsSkippedAndCounted)
     }
     return nullptr;
   };
-  ASSERT_TRUE(waitFor([&] { return find_status() != nullptr; }, 5.0)) << "no diagnostics with the failed frame";
+  ASSERT_TRUE(waitFor([&] { return find_status() != nullptr; }, 5.0))
+      << "no diagnostics with the failed frame";
   const diagnostic_msgs::DiagnosticStatus& status = *find_status();
   std::map<std::string, std::string> values;
   for (const auto& kv : status.values)

@@ -18,7 +18,8 @@ namespace
 {
 using test::waitFor;
 
-void expectBox(const Detection2D& d, const std::string& label, float x_min, float y_min, float x_max, float y_max)
+void expectBox(const Detection2D& d, const std::string& label, float x_min, float y_min, float x_max,
+               float y_max)
 {
   EXPECT_EQ(d.label, label);
   EXPECT_FLOAT_EQ(d.score, 1.F) << "ground truth has no score column: default_score";
@@ -35,11 +36,13 @@ TEST(YoloReplayNodeletTest, PublishesTheBoxesOfTheLabelFiles)
   ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 10);
   ros::Subscriber sub = nh.subscribe<Detection2DArray>(
       "detections", 10, [&](const Detection2DArray::ConstPtr& m) { received.push_back(m); });
-  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 20.0)) << "the nodelet never subscribed image";
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 20.0))
+      << "the nodelet never subscribed image";
 
   // The replay never looks at the pixels: a tiny 16UC1 image of KITTI's size in the header only
   // would do, but the detections are clipped to width × height, so give the real size.
-  auto make_image = [](int k) {
+  auto make_image = [](int k)
+  {
     auto image = boost::make_shared<sensor_msgs::Image>();
     image->header.stamp = ros::Time(1317000000 + k, 0);
     image->header.frame_id = "camera_color_left";
@@ -60,7 +63,8 @@ TEST(YoloReplayNodeletTest, PublishesTheBoxesOfTheLabelFiles)
           << "no detections for frame " << k;
     }
   }
-  EXPECT_FALSE(waitFor([&] { return received.size() > 3; }, 1.0)) << "output for frame 3, which has no label file";
+  EXPECT_FALSE(waitFor([&] { return received.size() > 3; }, 1.0))
+      << "output for frame 3, which has no label file";
   ASSERT_EQ(received.size(), 3U);
   for (int k = 0; k < 3; ++k)
   {

@@ -3,10 +3,10 @@
 // very object the sender published (pointer identity), i.e. no serialisation and no copy.
 #include <gtest/gtest.h>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/loader.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <boost/make_shared.hpp>
 
 #include <atomic>
 #include <mutex>
@@ -83,21 +83,23 @@ TEST(ZeroCopy, ReceiverSeesTheSenderObject)
   // The manager owns the nodelets; the test only observes them.
   SenderNodelet* sender = nullptr;
   ReceiverNodelet* receiver = nullptr;
-  nodelet::Loader manager([&](const std::string& type) -> boost::shared_ptr<nodelet::Nodelet> {
-    if (type == "test/sender")
-    {
-      auto nodelet = boost::make_shared<SenderNodelet>();
-      sender = nodelet.get();
-      return nodelet;
-    }
-    if (type == "test/receiver")
-    {
-      auto nodelet = boost::make_shared<ReceiverNodelet>();
-      receiver = nodelet.get();
-      return nodelet;
-    }
-    return nullptr;
-  });
+  nodelet::Loader manager(
+      [&](const std::string& type) -> boost::shared_ptr<nodelet::Nodelet>
+      {
+        if (type == "test/sender")
+        {
+          auto nodelet = boost::make_shared<SenderNodelet>();
+          sender = nodelet.get();
+          return nodelet;
+        }
+        if (type == "test/receiver")
+        {
+          auto nodelet = boost::make_shared<ReceiverNodelet>();
+          receiver = nodelet.get();
+          return nodelet;
+        }
+        return nullptr;
+      });
   const nodelet::M_string remappings;
   const nodelet::V_string args;
   ASSERT_TRUE(manager.load("/sender", "test/sender", remappings, args));

@@ -56,7 +56,7 @@ struct DynamicGridConfig
   /// free now) at most birth_motion_speed * dt away [m/s] (>=0; 0 disables).
   double birth_motion_speed = 20.0;
   double birth_motion_fraction = 0.5;  ///< share of such newborn particles [0, 1]
-  std::uint32_t seed = 42;            ///< seed of the std::mt19937 (same seed + input = same output)
+  std::uint32_t seed = 42;             ///< seed of the std::mt19937 (same seed + input = same output)
 
   // --- classification (reporting only, the filter does not use it) ---
   double dynamic_threshold = 0.5;      ///< P(D) from which a cell may be dynamic (0..1]
@@ -176,12 +176,12 @@ private:
   std::vector<std::int32_t> birth_cell_;
   std::vector<float> birth_x_, birth_y_, birth_vx_, birth_vy_, birth_w_;
   // motion-driven birth
-  std::vector<std::uint8_t> occupied_mask_;   // measured occupied (p_o > 1/2) in the last scan
-  std::vector<std::uint8_t> previous_mask_;   // the same for the scan before, shifted with the grid
-  std::vector<std::int32_t> vacated_;         // cells occupied in the previous scan, free now
-  std::vector<std::int32_t> bucket_start_;    // vacated_ sorted by bucket: first index per bucket
+  std::vector<std::uint8_t> occupied_mask_;  // measured occupied (p_o > 1/2) in the last scan
+  std::vector<std::uint8_t> previous_mask_;  // the same for the scan before, shifted with the grid
+  std::vector<std::int32_t> vacated_;        // cells occupied in the previous scan, free now
+  std::vector<std::int32_t> bucket_start_;   // vacated_ sorted by bucket: first index per bucket
   std::vector<std::int32_t> bucket_cells_;
-  std::vector<std::int32_t> candidates_;      // scratch: vacated cells near one birth cell
+  std::vector<std::int32_t> candidates_;  // scratch: vacated cells near one birth cell
   int bucket_cols_ = 0;
   int bucket_rows_ = 0;
   bool have_previous_ = false;

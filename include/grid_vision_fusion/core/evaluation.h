@@ -24,14 +24,14 @@ namespace grid_vision_fusion
 /// A ground-truth or detected object in one frame.
 struct EvalObject
 {
-  std::string frame;        ///< frame identifier (e.g. "000042"); matching happens within a frame
-  std::string label;        ///< object class, e.g. "car"
+  std::string frame;  ///< frame identifier (e.g. "000042"); matching happens within a frame
+  std::string label;  ///< object class, e.g. "car"
   Motion motion = Motion::kUnknown;
-  BoundingBox box;          ///< 2-D box in the image [px]
-  float score = 1.F;        ///< detector confidence (1 for ground truth)
-  bool difficult = false;   ///< ground truth only: ignored by the matching
+  BoundingBox box;              ///< 2-D box in the image [px]
+  float score = 1.F;            ///< detector confidence (1 for ground truth)
+  bool difficult = false;       ///< ground truth only: ignored by the matching
   double longitudinal_m = 0.0;  ///< distance ahead of the ego vehicle [m], for the range filter
-  bool has_state = false;   ///< position/velocity below are valid
+  bool has_state = false;       ///< position/velocity below are valid
   double x = 0.0, y = 0.0;      ///< position [m] (world frame)
   double vx = 0.0, vy = 0.0;    ///< velocity [m/s] (world frame)
 };
@@ -39,8 +39,8 @@ struct EvalObject
 /// Parameters of evaluate().
 struct EvaluationConfig
 {
-  double iou_threshold = 0.5;         ///< minimum IoU of a true positive, (0, 1]
-  double max_longitudinal_m = 30.0;   ///< objects farther ahead are left out [m], > 0
+  double iou_threshold = 0.5;        ///< minimum IoU of a true positive, (0, 1]
+  double max_longitudinal_m = 30.0;  ///< objects farther ahead are left out [m], > 0
   /// Evaluate per motion x class ("dynamicCar"); false: per class only ("car").
   bool motion_classes = true;
 
@@ -52,15 +52,15 @@ struct EvaluationConfig
 struct ClassMetrics
 {
   std::string name;
-  std::size_t ground_truth = 0;   ///< non-difficult ground-truth objects
-  std::size_t detections = 0;     ///< detections counted (not ignored)
+  std::size_t ground_truth = 0;  ///< non-difficult ground-truth objects
+  std::size_t detections = 0;    ///< detections counted (not ignored)
   std::size_t true_positives = 0;
   std::size_t false_positives = 0;
-  double precision = 0.0;         ///< at the operating point (all detections)
+  double precision = 0.0;  ///< at the operating point (all detections)
   double recall = 0.0;
   double f1 = 0.0;
   double average_precision = 0.0;
-  std::vector<double> recall_curve;     ///< cumulative, one point per counted detection
+  std::vector<double> recall_curve;  ///< cumulative, one point per counted detection
   std::vector<double> precision_curve;
 };
 
@@ -117,14 +117,14 @@ using MotionCounts = std::array<std::size_t, 3>;
 /// Everything evaluate() measures.
 struct EvaluationResult
 {
-  std::vector<ClassMetrics> classes;  ///< sorted by name; classes of the ground truth first
+  std::vector<ClassMetrics> classes;    ///< sorted by name; classes of the ground truth first
   double mean_average_precision = 0.0;  ///< over the classes present in the ground truth
   /// confusion[truth][predicted], indices = Motion values (unknown, static, dynamic), over the
   /// objects matched by class and IoU regardless of motion.
   std::array<std::array<std::size_t, 3>, 3> motion_confusion{};
-  ErrorStats position_error_m;     ///< |p_det − p_gt| of matched objects with a state
-  ErrorStats speed_error_mps;      ///< ||v_det| − |v_gt|| of matched objects with a state
-  ErrorStats heading_error_rad;    ///< wrapped |heading_det − heading_gt|, both dynamic
+  ErrorStats position_error_m;   ///< |p_det − p_gt| of matched objects with a state
+  ErrorStats speed_error_mps;    ///< ||v_det| − |v_gt|| of matched objects with a state
+  ErrorStats heading_error_rad;  ///< wrapped |heading_det − heading_gt|, both dynamic
   /// Every match of motion_confusion, in matching order (classes by name, detections by score).
   std::vector<MatchedObject> matched_objects;
   /// Per class: motion_confusion of that class's matches.

@@ -40,12 +40,14 @@ cv::Mat drawPrCurve(const ClassMetrics& metrics);
 
 /// A histogram of `values` with `bins` equal bins from 0 to the largest value, titled `title`,
 /// x axis labelled `unit`, with the median and the 90th percentile marked. 640 x 480, CV_8UC3.
-cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const std::string& unit, int bins = 20);
+cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const std::string& unit,
+                      int bins = 20);
 
 /// Writes metrics.json, report.md, matches.csv, the Cartucho folders, pr_<class>.png for every
 /// class and hist_position.png, hist_speed.png, hist_heading.png into `dir` (created if needed).
 /// @throws std::runtime_error naming a file that cannot be written.
-void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result, const EvaluationConfig& config,
-                            const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections);
+void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result,
+                            const EvaluationConfig& config, const std::vector<EvalObject>& ground_truth,
+                            const std::vector<EvalObject>& detections);
 
 }  // namespace grid_vision_fusion

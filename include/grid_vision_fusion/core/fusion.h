@@ -88,12 +88,12 @@ struct Detection
 struct ProjectedPointsView
 {
   std::size_t size = 0;
-  const float* u = nullptr;      ///< pixel column [px]
-  const float* v = nullptr;      ///< pixel row [px]
-  const float* x = nullptr;      ///< cell position x [m], grid frame
-  const float* y = nullptr;      ///< cell position y [m], grid frame
-  const float* vx = nullptr;     ///< cell velocity x [m/s], grid frame
-  const float* vy = nullptr;     ///< cell velocity y [m/s], grid frame
+  const float* u = nullptr;             ///< pixel column [px]
+  const float* v = nullptr;             ///< pixel row [px]
+  const float* x = nullptr;             ///< cell position x [m], grid frame
+  const float* y = nullptr;             ///< cell position y [m], grid frame
+  const float* vx = nullptr;            ///< cell velocity x [m/s], grid frame
+  const float* vy = nullptr;            ///< cell velocity y [m/s], grid frame
   const std::uint8_t* state = nullptr;  ///< CellState values
 };
 
@@ -171,8 +171,7 @@ double median(std::vector<double>& values);
 
 /// Motion of a region from its cardinalities (larger set wins; tie and minimum count per
 /// `config`). Returns kUnknown for an empty region.
-Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points,
-                    const FusionConfig& config);
+Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, const FusionConfig& config);
 
 /// Fuses the detector boxes with the projected grid points: builds the fusion region of every
 /// box, collects the valid points inside it and computes its point-wise features. Regions
@@ -184,8 +183,8 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
 /// Checks that a detections/points pair can be fused: boxes finite, x_min <= x_max,
 /// y_min <= y_max and inside the image (1 px tolerance), and the image sizes of both inputs
 /// equal. Returns an empty string when they can, else a message naming what is wrong.
-std::string checkFusionInputs(const std::vector<Detection>& detections,
-                              std::uint32_t detections_width, std::uint32_t detections_height,
-                              std::uint32_t points_width, std::uint32_t points_height);
+std::string checkFusionInputs(const std::vector<Detection>& detections, std::uint32_t detections_width,
+                              std::uint32_t detections_height, std::uint32_t points_width,
+                              std::uint32_t points_height);
 
 }  // namespace grid_vision_fusion

@@ -19,11 +19,11 @@ namespace grid_vision_fusion
 /// It borrows the arrays (e.g. those of a DynamicGrid message) and copies nothing.
 struct GridCellsView
 {
-  std::uint32_t width = 0;    ///< cells along +x
-  std::uint32_t height = 0;   ///< cells along +y
-  double resolution = 0.0;    ///< cell edge [m]
-  double origin_x = 0.0;      ///< x of the corner of cell (0, 0) in the grid frame [m]
-  double origin_y = 0.0;      ///< y of the corner of cell (0, 0) in the grid frame [m]
+  std::uint32_t width = 0;           ///< cells along +x
+  std::uint32_t height = 0;          ///< cells along +y
+  double resolution = 0.0;           ///< cell edge [m]
+  double origin_x = 0.0;             ///< x of the corner of cell (0, 0) in the grid frame [m]
+  double origin_y = 0.0;             ///< y of the corner of cell (0, 0) in the grid frame [m]
   const float* p_static = nullptr;   ///< P(static occupied) per cell, [0, 1]
   const float* p_dynamic = nullptr;  ///< P(dynamic occupied) per cell, [0, 1]
   const float* vx = nullptr;         ///< mean velocity along +x given dynamic [m/s], grid frame
@@ -109,10 +109,11 @@ struct ProjectedCells
   std::vector<float> u, v, depth, x, y, vx, vy, p_static, p_dynamic;
   std::vector<std::uint8_t> state;  ///< CellState values
 
-  std::size_t cells_selected = 0;   ///< cells that passed the occupancy threshold
-  std::size_t cells_invalid = 0;    ///< cells skipped: NaN/Inf probability, or NaN/Inf velocity of a dynamic cell
-  std::size_t points_behind = 0;    ///< points dropped with depth < min_depth
-  std::size_t points_outside = 0;   ///< points dropped outside the image
+  std::size_t cells_selected = 0;  ///< cells that passed the occupancy threshold
+  std::size_t cells_invalid =
+      0;  ///< cells skipped: NaN/Inf probability, or NaN/Inf velocity of a dynamic cell
+  std::size_t points_behind = 0;   ///< points dropped with depth < min_depth
+  std::size_t points_outside = 0;  ///< points dropped outside the image
 
   std::size_t size() const { return u.size(); }
   /// Reserves room for `points` points in every array.
@@ -125,7 +126,7 @@ struct ProjectedCells
 inline CellState cellState(float p_static, float p_dynamic, const GridProjectionConfig& config)
 {
   return p_dynamic > config.dynamic_ratio * (static_cast<double>(p_static) + p_dynamic) ? CellState::kDynamic
-                                                                                       : CellState::kStatic;
+                                                                                        : CellState::kStatic;
 }
 
 /// Projects the occupied cells of `grid` into `camera`: selects the cells (occupied_threshold),

@@ -14,15 +14,15 @@ namespace grid_vision_fusion
 /// One OXTS (GPS/IMU) record, the 30 values of oxts/data/NNNNNNNNNN.txt in dataformat.txt order.
 struct OxtsRecord
 {
-  double lat = 0.0, lon = 0.0, alt = 0.0;        ///< [deg], [deg], [m]
-  double roll = 0.0, pitch = 0.0, yaw = 0.0;     ///< [rad]; yaw 0 = east, counter-clockwise
-  double vn = 0.0, ve = 0.0;                     ///< velocity north / east [m/s]
-  double vf = 0.0, vl = 0.0, vu = 0.0;           ///< forward / left / up velocity [m/s]
-  double ax = 0.0, ay = 0.0, az = 0.0;           ///< acceleration in the vehicle frame [m/s²]
-  double af = 0.0, al = 0.0, au = 0.0;           ///< forward / left / up acceleration [m/s²]
-  double wx = 0.0, wy = 0.0, wz = 0.0;           ///< angular rate in the vehicle frame [rad/s]
-  double wf = 0.0, wl = 0.0, wu = 0.0;           ///< angular rate forward / left / up [rad/s]
-  double pos_accuracy = 0.0, vel_accuracy = 0.0; ///< [m], [m/s]
+  double lat = 0.0, lon = 0.0, alt = 0.0;         ///< [deg], [deg], [m]
+  double roll = 0.0, pitch = 0.0, yaw = 0.0;      ///< [rad]; yaw 0 = east, counter-clockwise
+  double vn = 0.0, ve = 0.0;                      ///< velocity north / east [m/s]
+  double vf = 0.0, vl = 0.0, vu = 0.0;            ///< forward / left / up velocity [m/s]
+  double ax = 0.0, ay = 0.0, az = 0.0;            ///< acceleration in the vehicle frame [m/s²]
+  double af = 0.0, al = 0.0, au = 0.0;            ///< forward / left / up acceleration [m/s²]
+  double wx = 0.0, wy = 0.0, wz = 0.0;            ///< angular rate in the vehicle frame [rad/s]
+  double wf = 0.0, wl = 0.0, wu = 0.0;            ///< angular rate forward / left / up [rad/s]
+  double pos_accuracy = 0.0, vel_accuracy = 0.0;  ///< [m], [m/s]
   int navstat = 0, numsats = 0, posmode = 0, velmode = 0, orimode = 0;
 };
 
@@ -74,13 +74,16 @@ struct TrackletPose
 /// One labelled object of a raw drive (tracklet_labels.xml).
 struct Tracklet
 {
-  std::string object_type;  ///< "Car", "Van", "Truck", "Pedestrian", "Cyclist", "Tram", ...
+  std::string object_type;           ///< "Car", "Van", "Truck", "Pedestrian", "Cyclist", "Tram", ...
   double h = 0.0, w = 0.0, l = 0.0;  ///< box height, width, length [m]
   int first_frame = 0;
-  std::vector<TrackletPose> poses;   ///< pose j belongs to frame first_frame + j
+  std::vector<TrackletPose> poses;  ///< pose j belongs to frame first_frame + j
 
   /// Whether the tracklet has a pose in `frame`.
-  bool inFrame(int frame) const { return frame >= first_frame && frame < first_frame + static_cast<int>(poses.size()); }
+  bool inFrame(int frame) const
+  {
+    return frame >= first_frame && frame < first_frame + static_cast<int>(poses.size());
+  }
 };
 
 /// Reads a tracklet_labels.xml (Boost serialization XML of the KITTI raw data).

@@ -22,9 +22,8 @@ void drawProjectedPoints(cv::Mat& image, const ProjectedPointsView& points, int 
 /// Draws the fusion result over `image` (CV_8UC3, BGR): the projected points, the fusion band
 /// of every box (thin rectangle), every box (thick, coloured by the motion of its object; grey
 /// when its region was empty) and a label "dynamic car 4.2 m/s" / "static van".
-void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
-                       const FusionResult& result, const ProjectedPointsView& points,
-                       const FusionConfig& config);
+void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections, const FusionResult& result,
+                       const ProjectedPointsView& points, const FusionConfig& config);
 
 /// The label text of an object: "<motion> <label>", plus " <speed> m/s" (one decimal) when
 /// dynamic, e.g. "dynamic car 4.2 m/s", "static van".

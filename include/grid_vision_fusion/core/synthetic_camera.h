@@ -26,19 +26,19 @@ struct SyntheticCameraModel
 /// How the road is painted: a straight road along world x.
 struct RoadStyle
 {
-  double center_y = 0.0;      ///< world y of the centre line [m]
-  double half_width = 7.0;    ///< asphalt from center_y − half_width to center_y + half_width [m]
-  double lane_width = 3.5;    ///< dashed lane lines every lane_width from the centre [m]
+  double center_y = 0.0;    ///< world y of the centre line [m]
+  double half_width = 7.0;  ///< asphalt from center_y − half_width to center_y + half_width [m]
+  double lane_width = 3.5;  ///< dashed lane lines every lane_width from the centre [m]
 };
 
 /// Label geometry of one actor in one image.
 struct ActorInImage
 {
-  bool in_view = false;        ///< some part projects into the image in front of the camera
-  BoundingBox box;             ///< projection of the 3-D box, clipped to the image [px]
-  double truncation = 0.0;     ///< 1 − clipped area / unclipped area of the projected box, [0, 1]
-  int silhouette_pixels = 0;   ///< pixels whose ray passes through the actor
-  int visible_pixels = 0;      ///< pixels where the actor is the nearest surface
+  bool in_view = false;       ///< some part projects into the image in front of the camera
+  BoundingBox box;            ///< projection of the 3-D box, clipped to the image [px]
+  double truncation = 0.0;    ///< 1 − clipped area / unclipped area of the projected box, [0, 1]
+  int silhouette_pixels = 0;  ///< pixels whose ray passes through the actor
+  int visible_pixels = 0;     ///< pixels where the actor is the nearest surface
   /// KITTI occlusion level from visible / silhouette: ≥ 0.8 → 0, ≥ 0.4 → 1, > 0 → 2, else 3.
   int occlusionLevel() const;
 };
@@ -46,8 +46,8 @@ struct ActorInImage
 /// One rendered image with its buffers.
 struct RenderedImage
 {
-  cv::Mat bgr;        ///< CV_8UC3
-  cv::Mat object_id;  ///< CV_32SC1: actor index, or −1 for ground, scenery and sky
+  cv::Mat bgr;                       ///< CV_8UC3
+  cv::Mat object_id;                 ///< CV_32SC1: actor index, or −1 for ground, scenery and sky
   std::vector<ActorInImage> actors;  ///< one per actor of the snapshot
 };
 

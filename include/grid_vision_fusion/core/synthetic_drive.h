@@ -16,16 +16,16 @@ namespace grid_vision_fusion
 /// Where and how a synthetic drive is written.
 struct SyntheticDriveOptions
 {
-  std::string output_root;           ///< the drive goes to <root>/<date>/<date>_drive_<NNNN>_sync
-  std::string calibration_dir;       ///< folder with calib_cam_to_cam/velo_to_cam/imu_to_velo.txt
-  std::string date = "2011_09_26";   ///< recording day: folder names and first time stamp
-  int drive_number = 9001;           ///< synthetic drives count from 9001, real ones stay below
-  int max_frames = -1;               ///< write only the first N frames (< 0: all)
+  std::string output_root;          ///< the drive goes to <root>/<date>/<date>_drive_<NNNN>_sync
+  std::string calibration_dir;      ///< folder with calib_cam_to_cam/velo_to_cam/imu_to_velo.txt
+  std::string date = "2011_09_26";  ///< recording day: folder names and first time stamp
+  int drive_number = 9001;          ///< synthetic drives count from 9001, real ones stay below
+  int max_frames = -1;              ///< write only the first N frames (< 0: all)
   std::string start_time = "2011-09-26 13:00:00.000000000";  ///< stamp of frame 0 (UTC)
-  double origin_lat_deg = 49.011;    ///< world origin for the OXTS records (Karlsruhe)
+  double origin_lat_deg = 49.011;  ///< world origin for the OXTS records (Karlsruhe)
   double origin_lon_deg = 8.4237;
   double origin_alt_m = 116.0;
-  double lidar_height_m = 1.73;      ///< height of the velodyne above the road (KITTI)
+  double lidar_height_m = 1.73;  ///< height of the velodyne above the road (KITTI)
 
   /// @throws std::invalid_argument naming the bad field.
   void validate() const;
@@ -34,10 +34,10 @@ struct SyntheticDriveOptions
 /// What writeSyntheticDrive() produced.
 struct SyntheticDriveSummary
 {
-  std::string drive_dir;        ///< the *_sync folder
+  std::string drive_dir;  ///< the *_sync folder
   int frames = 0;
-  std::size_t lidar_points = 0; ///< over all scans
-  std::size_t labels = 0;       ///< label_2 lines over all frames
+  std::size_t lidar_points = 0;  ///< over all scans
+  std::size_t labels = 0;        ///< label_2 lines over all frames
 };
 
 /// A scenario that replays a recorded KITTI raw drive (its oxts/ and tracklet_labels.xml): the
@@ -54,7 +54,8 @@ std::string oxtsDataFormat();
 
 /// Writes the drive. `progress(done, total)` is called after every frame.
 /// @throws std::runtime_error naming a file that cannot be read or written.
-SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
+SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
+                                          const SyntheticDriveOptions& options,
                                           const std::function<void(int, int)>& progress = nullptr);
 
 }  // namespace grid_vision_fusion

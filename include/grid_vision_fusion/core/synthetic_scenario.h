@@ -14,9 +14,9 @@ namespace grid_vision_fusion
 /// Everything a synthetic drive needs.
 struct SyntheticScenario
 {
-  std::uint32_t seed = 42;        ///< seeds the lidar noise and dropouts
-  double duration_s = 10.0;       ///< length of the drive [s], > 0
-  double frame_rate_hz = 10.0;    ///< frames per second (KITTI: 10), > 0
+  std::uint32_t seed = 42;                  ///< seeds the lidar noise and dropouts
+  double duration_s = 10.0;                 ///< length of the drive [s], > 0
+  double frame_rate_hz = 10.0;              ///< frames per second (KITTI: 10), > 0
   Trajectory ego = Trajectory::parked({});  ///< ego vehicle (IMU / base_link) ground pose over time
   std::vector<Actor> actors;
   std::vector<SceneryBox> scenery;

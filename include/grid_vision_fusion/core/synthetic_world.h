@@ -53,7 +53,7 @@ private:
     kConstantTurn,
   } kind_ = Kind::kWaypoints;
   std::vector<Eigen::Vector3d> waypoints_;
-  std::vector<double> segment_yaw_;  ///< yaw held at the end of each segment
+  std::vector<double> segment_yaw_;   ///< yaw held at the end of each segment
   std::vector<double> waypoint_yaw_;  ///< explicit yaw per waypoint (posed()), else empty
   Pose2D start_;
   double speed_ = 0.0;
@@ -99,7 +99,7 @@ struct SceneryBox
 struct RayHit
 {
   double range = std::numeric_limits<double>::infinity();  ///< along the unit direction [m]
-  int object = kNothing;      ///< actor index, or kGround / kScenery + index / kNothing
+  int object = kNothing;  ///< actor index, or kGround / kScenery + index / kNothing
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< world-frame normal of the hit surface
 
   static constexpr int kNothing = -1;
@@ -141,7 +141,7 @@ private:
   std::vector<GroundBox> actor_boxes_;
   std::vector<bool> actor_active_;
   std::vector<GroundBox> scenery_boxes_;
-  std::vector<bool> culled_;  ///< per box (actors then scenery), see cullBeyond()
+  std::vector<bool> culled_;          ///< per box (actors then scenery), see cullBeyond()
   std::vector<double> bound_radius_;  ///< per box (actors then scenery), for a quick rejection
 };
 
@@ -151,11 +151,11 @@ struct LidarConfig
   /// Beam elevations [rad], top to bottom. Empty: the HDL-64E layout, upper block +2° to
   /// −8.33° in 1/3° steps (32 beams), lower block −8.83° to −24.33° in 1/2° steps (32 beams).
   std::vector<double> elevations;
-  int azimuth_steps = 2048;        ///< columns per revolution (0.176°)
-  double min_range = 2.5;          ///< closer returns are discarded [m]
-  double max_range = 120.0;        ///< [m]
-  double range_noise_std = 0.02;   ///< Gaussian range noise [m]
-  double dropout = 0.02;           ///< probability that a return is lost, [0, 1)
+  int azimuth_steps = 2048;       ///< columns per revolution (0.176°)
+  double min_range = 2.5;         ///< closer returns are discarded [m]
+  double max_range = 120.0;       ///< [m]
+  double range_noise_std = 0.02;  ///< Gaussian range noise [m]
+  double dropout = 0.02;          ///< probability that a return is lost, [0, 1)
 
   /// The HDL-64E elevations described above.
   static std::vector<double> hdl64Elevations();

@@ -110,9 +110,9 @@ struct DarknetCfgInfo
   int input_width = 0;   ///< [net] width [px]
   int input_height = 0;  ///< [net] height [px]
   int input_channels = 0;
-  int num_classes = -1;     ///< `classes` of the [yolo]/[region] layers (-1: none)
-  int yolo_layers = 0;      ///< number of [yolo]/[region] sections
-  std::size_t parameters = 0;  ///< float32 values the weights file must hold after its header
+  int num_classes = -1;                   ///< `classes` of the [yolo]/[region] layers (-1: none)
+  int yolo_layers = 0;                    ///< number of [yolo]/[region] sections
+  std::size_t parameters = 0;             ///< float32 values the weights file must hold after its header
   std::vector<DarknetParamBlock> blocks;  ///< the weighted layers, in file order
 };
 
@@ -143,8 +143,8 @@ struct InputTransform
   cv::Size input_size;
   double scale_x = 1.0;
   double scale_y = 1.0;
-  double pad_x = 0.0;  ///< left border [network px]
-  double pad_y = 0.0;  ///< top border [network px]
+  double pad_x = 0.0;      ///< left border [network px]
+  double pad_y = 0.0;      ///< top border [network px]
   int resized_width = 0;   ///< image width once resized [network px]
   int resized_height = 0;  ///< image height once resized [network px]
 
@@ -173,8 +173,8 @@ std::vector<YoloCandidate> decodeYoloOutputs(const std::vector<cv::Mat>& outputs
 
 /// Per-class non-maximum suppression (cv::dnn::NMSBoxes per class id): returns the kept
 /// candidates, by class then by decreasing score.
-std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& candidates, double score_threshold,
-                                            double nms_threshold);
+std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& candidates,
+                                            double score_threshold, double nms_threshold);
 
 /// A YOLO network ready to run. Not thread-safe: one detect() at a time.
 class YoloDetector

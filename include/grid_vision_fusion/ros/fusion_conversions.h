@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/core/fusion.h"
 
@@ -27,10 +27,8 @@ ProjectedPointsView viewOf(const ProjectedGrid& msg);
 /// The DetectedObjectArray of a fusion result: header.stamp = the image stamp,
 /// header.frame_id = `grid_frame_id`, image_frame_id = the camera frame of `image_header`;
 /// ids are 0, 1, 2... in detection order.
-DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header,
-                                      const std::string& grid_frame_id,
-                                      const std::vector<Detection>& detections,
-                                      const FusionResult& result);
+DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,
+                                      const std::vector<Detection>& detections, const FusionResult& result);
 
 /// rviz markers for `objects`: a DELETEALL first, then per object a cylinder at its position
 /// (static blue, dynamic green, unknown grey), an arrow along the velocity of dynamic objects

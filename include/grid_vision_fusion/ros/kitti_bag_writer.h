@@ -31,11 +31,11 @@ namespace grid_vision_fusion
 /// Topic and frame names of one KITTI camera in kitti2bag's layout.
 struct KittiCameraNames
 {
-  std::string name;        ///< "camera_color_left", ... (also the frame id)
-  std::string image_topic; ///< "/kitti/<name>/image_raw"
-  std::string info_topic;  ///< "/kitti/<name>/camera_info"
-  std::string folder;      ///< "image_0<i>" in the drive folder
-  std::string encoding;    ///< "mono8" (cameras 0, 1) or "rgb8" (cameras 2, 3)
+  std::string name;         ///< "camera_color_left", ... (also the frame id)
+  std::string image_topic;  ///< "/kitti/<name>/image_raw"
+  std::string info_topic;   ///< "/kitti/<name>/camera_info"
+  std::string folder;       ///< "image_0<i>" in the drive folder
+  std::string encoding;     ///< "mono8" (cameras 0, 1) or "rgb8" (cameras 2, 3)
 };
 
 /// Names of KITTI camera `camera` (0 grey left, 1 grey right, 2 colour left, 3 colour right).
@@ -72,9 +72,9 @@ struct KittiBagOptions
 /// What a conversion wrote.
 struct KittiBagSummary
 {
-  std::size_t frames = 0;       ///< frames converted
-  std::size_t messages = 0;     ///< messages written, all topics together
-  std::string output_bag;       ///< the bag written
+  std::size_t frames = 0;    ///< frames converted
+  std::size_t messages = 0;  ///< messages written, all topics together
+  std::string output_bag;    ///< the bag written
 };
 
 /// Converts the frames [first_frame, last_frame] of a KITTI raw synced drive into a bag.
@@ -95,8 +95,9 @@ ros::Time toRosTime(const KittiStamp& stamp);
 
 /// A transform message parent → child holding `parent_from_child` (the child frame's pose in
 /// the parent frame, tf's convention).
-geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& parent_from_child, const std::string& parent,
-                                               const std::string& child, const ros::Time& stamp);
+geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& parent_from_child,
+                                               const std::string& parent, const std::string& child,
+                                               const ros::Time& stamp);
 
 /// Optical centre of rectified camera `camera` in the rectified camera-0 frame [m]:
 /// t_i with P_rect_0i = K_i · [I | t_i] (for camera 2 of 2011_09_26: (0.0599, −0.0004, 0.0027)).

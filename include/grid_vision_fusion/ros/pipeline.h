@@ -169,10 +169,10 @@ struct PipelineTopics
 struct BagRunSummary
 {
   std::size_t messages_read = 0;
-  std::size_t frames = 0;        ///< images read
-  double bag_duration_s = 0.0;   ///< from the first to the last message read
-  double wall_s = 0.0;           ///< wall time of the whole run (reading and writing included)
-  std::vector<double> rss_mb;    ///< resident memory after every image [MiB]
+  std::size_t frames = 0;       ///< images read
+  double bag_duration_s = 0.0;  ///< from the first to the last message read
+  double wall_s = 0.0;          ///< wall time of the whole run (reading and writing included)
+  std::vector<double> rss_mb;   ///< resident memory after every image [MiB]
 };
 
 /// Reads `input_bag` in time order, feeds `pipeline`, calls `progress(done, total)` per message

@@ -86,7 +86,8 @@ public:
 /// @throws ProjectionSkipped with the reason (unusable camera_info, grid too old, no tf).
 ProjectedGrid::Ptr projectGridIntoCamera(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
                                          const tf2::BufferCore& tf, const GridProjectionNodeOptions& options,
-                                         const GridProjectionConfig& config, std::size_t* invalid_cells = nullptr);
+                                         const GridProjectionConfig& config,
+                                         std::size_t* invalid_cells = nullptr);
 
 // --- detector ----------------------------------------------------------------------------------
 
