@@ -1,6 +1,6 @@
 // evaluate: scores the detections of a run (a bag of DetectedObjectArray) against the ground
 // truth of a KITTI raw drive (tracklets + OXTS + calibration, or label files with a motion
-// column) and writes metrics.json, report.md, the Cartucho/mAP folders and the plots.
+// column) and writes metrics.json, report.md, matches.csv, the Cartucho/mAP folders and the plots.
 //
 //   rosrun grid_vision_fusion evaluate --drive <drive_sync dir> --detections <bag> --output <dir>
 //
@@ -37,8 +37,8 @@ Scores the detections of a run against the ground truth of a KITTI raw drive.
 required:
   --drive <dir>            KITTI raw synced drive (image_02/timestamps.txt, oxts/, tracklet_labels.xml)
   --detections <bag>       bag with grid_vision_fusion/DetectedObjectArray messages
-  --output <dir>           where metrics.json, report.md, ground-truth/, detection-results/ and
-                           the PNG plots are written (created if needed)
+  --output <dir>           where metrics.json, report.md, matches.csv, ground-truth/,
+                           detection-results/ and the PNG plots are written (created if needed)
 options:
   --calibration <dir>      folder of calib_cam_to_cam.txt, calib_velo_to_cam.txt,
                            calib_imu_to_velo.txt (default: the parent folder of --drive)
@@ -300,7 +300,7 @@ int run(const Options& o)
   gvf::writeEvaluationOutputs(o.output, result, o.evaluation, ground_truth, bag.detections);
   std::cout << gvf::reportMarkdown(result, o.evaluation);
   std::cerr << "Wrote " << o.output
-            << "/metrics.json, report.md, ground-truth/, detection-results/ and the plots\n";
+            << "/metrics.json, report.md, matches.csv, ground-truth/, detection-results/ and the plots\n";
   return 0;
 }
 }  // namespace

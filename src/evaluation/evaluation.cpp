@@ -106,6 +106,41 @@ void EvaluationConfig::validate() const
   }
 }
 
+std::string toString(SpeedBand band)
+{
+  switch (band)
+  {
+    case SpeedBand::kStatic:
+      return "static";
+    case SpeedBand::kBelow1:
+      return "0.5-1";
+    case SpeedBand::k1To3:
+      return "1-3";
+    case SpeedBand::kAbove3:
+      return ">3";
+    case SpeedBand::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+SpeedBand speedBandOf(Motion truth_motion, bool has_state, double truth_speed_mps)
+{
+  if (truth_motion == Motion::kStatic)
+  {
+    return SpeedBand::kStatic;
+  }
+  if (truth_motion != Motion::kDynamic || !has_state || !std::isfinite(truth_speed_mps))
+  {
+    return SpeedBand::kUnknown;
+  }
+  if (truth_speed_mps < 1.0)
+  {
+    return SpeedBand::kBelow1;
+  }
+  return truth_speed_mps < 3.0 ? SpeedBand::k1To3 : SpeedBand::kAbove3;
+}
+
 std::string evaluationClass(const std::string& label, Motion motion, bool with_motion)
 {
   if (!with_motion)
@@ -312,17 +347,37 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
       }
       const EvalObject& det = detections[d];
       const EvalObject& gt = ground_truth[match.truth];
-      ++result.motion_confusion[static_cast<std::size_t>(gt.motion)][static_cast<std::size_t>(det.motion)];
-      if (!det.has_state || !gt.has_state)
+      const auto truth_index = static_cast<std::size_t>(gt.motion);
+      const auto predicted_index = static_cast<std::size_t>(det.motion);
+      ++result.motion_confusion[truth_index][predicted_index];
+      ++result.motion_confusion_by_class[label][truth_index][predicted_index];
+      MatchedObject matched;
+      matched.frame = gt.frame;
+      matched.label = label;
+      matched.truth_motion = gt.motion;
+      matched.predicted_motion = det.motion;
+      matched.truth_speed_mps = gt.has_state ? std::hypot(gt.vx, gt.vy) : 0.0;
+      matched.band = speedBandOf(gt.motion, gt.has_state, matched.truth_speed_mps);
+      matched.longitudinal_m = gt.longitudinal_m;
+      matched.has_state = det.has_state && gt.has_state;
+      matched.position_error_m = std::nan("");
+      matched.speed_error_mps = std::nan("");
+      matched.heading_error_rad = std::nan("");
+      ++result.motion_by_class_and_band[label][matched.band][predicted_index];
+      if (matched.has_state)
       {
-        continue;
+        matched.position_error_m = std::hypot(det.x - gt.x, det.y - gt.y);
+        matched.speed_error_mps = std::abs(std::hypot(det.vx, det.vy) - matched.truth_speed_mps);
+        position_errors.push_back(matched.position_error_m);
+        speed_errors.push_back(matched.speed_error_mps);
+        if (det.motion == Motion::kDynamic && gt.motion == Motion::kDynamic)
+        {
+          matched.heading_error_rad =
+              std::abs(wrapAngle(std::atan2(det.vy, det.vx) - std::atan2(gt.vy, gt.vx)));
+          heading_errors.push_back(matched.heading_error_rad);
+        }
       }
-      position_errors.push_back(std::hypot(det.x - gt.x, det.y - gt.y));
-      speed_errors.push_back(std::abs(std::hypot(det.vx, det.vy) - std::hypot(gt.vx, gt.vy)));
-      if (det.motion == Motion::kDynamic && gt.motion == Motion::kDynamic)
-      {
-        heading_errors.push_back(std::abs(wrapAngle(std::atan2(det.vy, det.vx) - std::atan2(gt.vy, gt.vx))));
-      }
+      result.matched_objects.push_back(std::move(matched));
     }
   }
   result.position_error_m = errorStats(std::move(position_errors));

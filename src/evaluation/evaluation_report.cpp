@@ -81,6 +81,18 @@ std::string jsonStats(const ErrorStats& s)
          ", \"mean\": " + number(s.mean) + ", \"p90\": " + number(s.p90) + "}";
 }
 
+std::string jsonCounts(const MotionCounts& counts)
+{
+  return "[" + std::to_string(counts[0]) + ", " + std::to_string(counts[1]) + ", " +
+         std::to_string(counts[2]) + "]";
+}
+
+/// A number for a CSV field: empty when not finite.
+std::string csvNumber(double value, int decimals)
+{
+  return std::isfinite(value) ? number(value, decimals) : "";
+}
+
 std::string percent(double fraction)
 {
   return number(100.0 * fraction, 1);
@@ -181,7 +193,29 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
     out << (t ? ", " : "") << "[" << result.motion_confusion[t][0] << ", " << result.motion_confusion[t][1]
         << ", " << result.motion_confusion[t][2] << "]";
   }
-  out << "]},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
+  out << "]},\n  \"motion_by_class\": {";
+  // Per class: the confusion matrix, and the predicted-motion counts per truth speed band.
+  std::size_t class_index = 0;
+  for (const auto& [label, confusion] : result.motion_confusion_by_class)
+  {
+    out << (class_index++ ? "," : "") << "\n    " << jsonString(label) << ": {\"confusion\": [";
+    for (std::size_t t = 0; t < 3; ++t)
+    {
+      out << (t ? ", " : "") << jsonCounts(confusion[t]);
+    }
+    out << "], \"by_truth_speed_band\": {";
+    const auto bands = result.motion_by_class_and_band.find(label);
+    if (bands != result.motion_by_class_and_band.end())
+    {
+      std::size_t band_index = 0;
+      for (const auto& [band, counts] : bands->second)
+      {
+        out << (band_index++ ? ", " : "") << jsonString(toString(band)) << ": " << jsonCounts(counts);
+      }
+    }
+    out << "}}";
+  }
+  out << (class_index ? "\n  " : "") << "},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
       << ",\n  \"speed_error_mps\": " << jsonStats(result.speed_error_mps)
       << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad) << "\n}\n";
   return out.str();
@@ -226,6 +260,23 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
   row("position [m]", result.position_error_m, 1.0, 2);
   row("speed [m/s]", result.speed_error_mps, 1.0, 2);
   row("heading [deg] (dynamic only)", result.heading_error_rad, 180.0 / M_PI, 1);
+  return out.str();
+}
+
+std::string matchesCsv(const EvaluationResult& result)
+{
+  static const char* const kMotion[] = {"unknown", "static", "dynamic"};
+  std::ostringstream out;
+  out << "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
+         "position_error_m,speed_error_mps,heading_error_rad\n";
+  for (const MatchedObject& m : result.matched_objects)
+  {
+    out << m.frame << ',' << m.label << ',' << kMotion[static_cast<std::size_t>(m.truth_motion)] << ','
+        << kMotion[static_cast<std::size_t>(m.predicted_motion)] << ',' << toString(m.band) << ','
+        << number(m.truth_speed_mps, 3) << ',' << number(m.longitudinal_m, 2) << ','
+        << csvNumber(m.position_error_m, 3) << ',' << csvNumber(m.speed_error_mps, 3) << ','
+        << csvNumber(m.heading_error_rad, 4) << '\n';
+  }
   return out.str();
 }
 
@@ -346,6 +397,7 @@ void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& resu
   }
   writeFile(out / "metrics.json", metricsJson(result, config));
   writeFile(out / "report.md", reportMarkdown(result, config));
+  writeFile(out / "matches.csv", matchesCsv(result));
   writeCartuchoFolders(dir, ground_truth, detections, config);
   for (const auto& m : result.classes)
   {

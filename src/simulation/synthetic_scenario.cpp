@@ -62,21 +62,46 @@ Trajectory parseMotion(const YAML::Node& node, const std::string& where)
                                     get<double>(turn, "speed", where + ".constant_turn"),
                                     get<double>(turn, "yaw_rate", where + ".constant_turn"));
   }
+  // [t, x, y] (the yaw follows the path) or, in every waypoint, [t, x, y, yaw] (the yaw is given,
+  // e.g. for reversing: the heading stays opposite to the motion).
   std::vector<Eigen::Vector3d> points;
+  std::vector<double> times;
+  std::vector<Pose2D> poses;
+  std::size_t width = 0;  // 3 or 4 values per waypoint, as the first one has
   for (const auto& p : node["waypoints"])
   {
-    const auto values = p.as<std::vector<double>>();
-    if (values.size() != 3)
+    std::vector<double> values;
+    try
     {
-      throw std::runtime_error(where + ".waypoints: every waypoint is [t, x, y]");
+      values = p.as<std::vector<double>>();
     }
-    points.emplace_back(values[0], values[1], values[2]);
+    catch (const YAML::Exception&)
+    {
+    }
+    if (width == 0 && (values.size() == 3 || values.size() == 4))
+    {
+      width = values.size();
+    }
+    if (values.size() != width)
+    {
+      throw std::runtime_error(where + ".waypoints[" + std::to_string(points.size() + poses.size()) +
+                               "]: every waypoint is [t, x, y], or every one [t, x, y, yaw]");
+    }
+    if (values.size() == 4)
+    {
+      times.push_back(values[0]);
+      poses.push_back({values[1], values[2], values[3]});
+    }
+    else
+    {
+      points.emplace_back(values[0], values[1], values[2]);
+    }
   }
   double initial_yaw = 0.0;
   getOptional(node, "yaw", where, initial_yaw);
   try
   {
-    return Trajectory::waypoints(points, initial_yaw);
+    return poses.empty() ? Trajectory::waypoints(points, initial_yaw) : Trajectory::posed(times, poses);
   }
   catch (const std::invalid_argument& e)
   {

@@ -266,4 +266,104 @@ TEST(Evaluation, ThreeFrameRegression)
   EXPECT_NEAR(r.heading_error_rad.p90, 0.9 * M_PI / 2.0, 1e-12);
 }
 
+TEST(Evaluation, SpeedBands)
+{
+  EXPECT_EQ(speedBandOf(Motion::kStatic, true, 0.2), SpeedBand::kStatic);
+  EXPECT_EQ(speedBandOf(Motion::kStatic, false, 0.0), SpeedBand::kStatic);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, 0.5), SpeedBand::kBelow1);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, 0.99), SpeedBand::kBelow1);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, 1.0), SpeedBand::k1To3);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, 2.99), SpeedBand::k1To3);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, 3.0), SpeedBand::kAbove3);
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, false, 5.0), SpeedBand::kUnknown);  // no velocity
+  EXPECT_EQ(speedBandOf(Motion::kDynamic, true, std::nan("")), SpeedBand::kUnknown);
+  EXPECT_EQ(speedBandOf(Motion::kUnknown, true, 5.0), SpeedBand::kUnknown);
+  EXPECT_EQ(toString(SpeedBand::kStatic), "static");
+  EXPECT_EQ(toString(SpeedBand::kBelow1), "0.5-1");
+  EXPECT_EQ(toString(SpeedBand::k1To3), "1-3");
+  EXPECT_EQ(toString(SpeedBand::kAbove3), ">3");
+  EXPECT_EQ(toString(SpeedBand::kUnknown), "unknown");
+}
+
+// One object per frame, so every detection matches the ground truth of its frame.
+TEST(Evaluation, MatchedObjectsPerClassAndSpeedBand)
+{
+  const std::vector<EvalObject> gt{
+      withState(object("f0", "car", Motion::kStatic, kA), 10.0, 0.0, 0.0, 0.0),
+      withState(object("f1", "car", Motion::kDynamic, kA), 10.0, 0.0, 0.0, 0.8),  // 0.5-1
+      withState(object("f2", "car", Motion::kDynamic, kA), 10.0, 0.0, 2.0, 0.0),  // 1-3
+      withState(object("f3", "car", Motion::kDynamic, kA), 10.0, 0.0, 3.0, 4.0),  // >3 (5 m/s)
+      withState(object("f4", "pedestrian", Motion::kDynamic, kA), 5.0, 1.0, 1.2, 0.0),
+      object("f5", "pedestrian", Motion::kDynamic, kA),  // no state: band unknown, no errors
+      withState(object("f6", "car", Motion::kDynamic, kA), 10.0, 0.0, 6.0, 0.0),  // not detected
+  };
+  const std::vector<EvalObject> det{
+      withState(object("f0", "car", Motion::kStatic, kA), 11.0, 0.0, 0.0, 0.0),
+      withState(object("f1", "car", Motion::kStatic, kA), 10.0, 0.0, 0.0, 0.0),
+      withState(object("f2", "car", Motion::kDynamic, kA), 10.0, 0.5, 0.0, 2.5),
+      withState(object("f3", "car", Motion::kUnknown, kA), 10.0, 0.0, 0.0, 0.0),
+      withState(object("f4", "pedestrian", Motion::kDynamic, kA), 5.0, 1.0, 1.0, 0.0),
+      withState(object("f5", "pedestrian", Motion::kStatic, kA), 5.0, 1.0, 0.0, 0.0),
+  };
+  const EvaluationResult r = evaluate(gt, det, perClass());
+  ASSERT_EQ(r.matched_objects.size(), 6U);
+  // Classes by name (car before pedestrian), detections by score (all 1: input order).
+  const MatchedObject& slow = r.matched_objects[1];
+  EXPECT_EQ(slow.frame, "f1");
+  EXPECT_EQ(slow.label, "car");
+  EXPECT_EQ(slow.truth_motion, Motion::kDynamic);
+  EXPECT_EQ(slow.predicted_motion, Motion::kStatic);
+  EXPECT_EQ(slow.band, SpeedBand::kBelow1);
+  EXPECT_DOUBLE_EQ(slow.truth_speed_mps, 0.8);
+  EXPECT_DOUBLE_EQ(slow.longitudinal_m, 10.0);
+  EXPECT_TRUE(slow.has_state);
+  EXPECT_DOUBLE_EQ(slow.speed_error_mps, 0.8);
+  EXPECT_TRUE(std::isnan(slow.heading_error_rad));  // predicted static: no heading
+  const MatchedObject& medium = r.matched_objects[2];
+  EXPECT_EQ(medium.band, SpeedBand::k1To3);
+  EXPECT_DOUBLE_EQ(medium.position_error_m, 0.5);
+  EXPECT_DOUBLE_EQ(medium.speed_error_mps, 0.5);
+  EXPECT_NEAR(medium.heading_error_rad, M_PI / 2.0, 1e-12);
+  EXPECT_EQ(r.matched_objects[3].band, SpeedBand::kAbove3);
+  EXPECT_DOUBLE_EQ(r.matched_objects[3].truth_speed_mps, 5.0);
+  const MatchedObject& no_state = r.matched_objects[5];
+  EXPECT_EQ(no_state.label, "pedestrian");
+  EXPECT_EQ(no_state.band, SpeedBand::kUnknown);
+  EXPECT_FALSE(no_state.has_state);
+  EXPECT_TRUE(std::isnan(no_state.position_error_m));
+
+  const auto kU = static_cast<std::size_t>(Motion::kUnknown);
+  const auto kS = static_cast<std::size_t>(Motion::kStatic);
+  const auto kD = static_cast<std::size_t>(Motion::kDynamic);
+  ASSERT_EQ(r.motion_confusion_by_class.size(), 2U);
+  const auto& car = r.motion_confusion_by_class.at("car");
+  EXPECT_EQ(car[kS][kS], 1U);
+  EXPECT_EQ(car[kD][kS], 1U);
+  EXPECT_EQ(car[kD][kD], 1U);
+  EXPECT_EQ(car[kD][kU], 1U);
+  const auto& pedestrian = r.motion_confusion_by_class.at("pedestrian");
+  EXPECT_EQ(pedestrian[kD][kD], 1U);
+  EXPECT_EQ(pedestrian[kD][kS], 1U);
+  // The per-class matrices add up to the overall one.
+  for (std::size_t t = 0; t < 3; ++t)
+  {
+    for (std::size_t p = 0; p < 3; ++p)
+    {
+      EXPECT_EQ(car[t][p] + pedestrian[t][p], r.motion_confusion[t][p]) << t << " " << p;
+    }
+  }
+  const auto& car_bands = r.motion_by_class_and_band.at("car");
+  EXPECT_EQ(car_bands.at(SpeedBand::kStatic), (MotionCounts{0, 1, 0}));
+  EXPECT_EQ(car_bands.at(SpeedBand::kBelow1), (MotionCounts{0, 1, 0}));
+  EXPECT_EQ(car_bands.at(SpeedBand::k1To3), (MotionCounts{0, 0, 1}));
+  EXPECT_EQ(car_bands.at(SpeedBand::kAbove3), (MotionCounts{1, 0, 0}));
+  EXPECT_EQ(car_bands.count(SpeedBand::kUnknown), 0U);
+  const auto& pedestrian_bands = r.motion_by_class_and_band.at("pedestrian");
+  EXPECT_EQ(pedestrian_bands.at(SpeedBand::k1To3), (MotionCounts{0, 0, 1}));
+  EXPECT_EQ(pedestrian_bands.at(SpeedBand::kUnknown), (MotionCounts{0, 1, 0}));
+  // The overall error statistics are those of the matches with a state.
+  EXPECT_EQ(r.position_error_m.count, 5U);
+  EXPECT_EQ(r.heading_error_rad.count, 2U);  // f2 and f4
+}
+
 }  // namespace grid_vision_fusion

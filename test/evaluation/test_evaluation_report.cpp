@@ -61,6 +61,31 @@ TEST(EvaluationReport, JsonCarriesTheFigures)
       std::string::npos)
       << json;
   EXPECT_NE(json.find("\"counts\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]]"), std::string::npos) << json;
+  // Per class: the confusion and the counts per truth speed band (no state here: moving ones
+  // fall in the band "unknown").
+  EXPECT_NE(
+      json.find("\"motion_by_class\": {\n    \"car\": {\"confusion\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]], "
+                "\"by_truth_speed_band\": {\"static\": [0, 0, 1], \"unknown\": [0, 0, 1]}}\n  },"),
+      std::string::npos)
+      << json;
+}
+
+TEST(EvaluationReport, MatchesCsv)
+{
+  EvalObject gt = object("000003", "cyclist", Motion::kDynamic, kA, 1.F, 12.5);
+  gt.has_state = true;
+  gt.vx = 4.0;
+  EvalObject det = gt;
+  det.motion = Motion::kStatic;
+  det.x = 1.0;
+  det.vx = 0.0;
+  const EvaluationResult result = evaluate({gt}, {det}, EvaluationConfig{});
+  EXPECT_EQ(matchesCsv(result),
+            "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
+            "position_error_m,speed_error_mps,heading_error_rad\n"
+            "000003,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,\n");
+  EXPECT_EQ(matchesCsv(EvaluationResult{}).find('\n') + 1,
+            matchesCsv(EvaluationResult{}).size());  // header only
 }
 
 TEST(EvaluationReport, MarkdownTables)
@@ -125,8 +150,8 @@ TEST(EvaluationReport, WritesAllOutputs)
   const fs::path dir = fs::path(testing::TempDir()) / "evaluation_out";
   fs::remove_all(dir);
   writeEvaluationOutputs(dir.string(), c.result, c.config, c.gt, c.det);
-  for (const char* name : {"metrics.json", "report.md", "pr_dynamicCar.png", "pr_staticCar.png",
-                           "hist_position.png", "hist_speed.png", "hist_heading.png"})
+  for (const char* name : {"metrics.json", "report.md", "matches.csv", "pr_dynamicCar.png",
+                           "pr_staticCar.png", "hist_position.png", "hist_speed.png", "hist_heading.png"})
   {
     EXPECT_TRUE(fs::exists(dir / name)) << name;
   }

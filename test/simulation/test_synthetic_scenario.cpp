@@ -69,6 +69,34 @@ TEST(SyntheticScenario, ErrorsNameTheEntry)
   EXPECT_NE(errorOf("ego: {parked: {x: zero, y: 0}}\n").find("'x' has the wrong type"), std::string::npos);
   EXPECT_NE(errorOf("ego: [unclosed\n").find("cannot read scenario"), std::string::npos);
   EXPECT_EQ(parseColor("#0a0B0c"), 0x0A0B0CU);
+  EXPECT_NE(errorOf("ego: {waypoints: [[0, 0, 0, 0], [1, 5, 0]]}\n")
+                .find("ego.waypoints[1]: every waypoint is [t, x, y], or every one [t, x, y, yaw]"),
+            std::string::npos);
+  EXPECT_NE(errorOf("ego: {waypoints: [[0, 0]]}\n").find("ego.waypoints[0]: every waypoint"),
+            std::string::npos);
+}
+
+TEST(SyntheticScenario, WaypointsWithYawKeepTheGivenHeading)
+{
+  // A car reversing out of a parking space: it moves along +y with its nose towards −y, then
+  // turns to +x while still reversing, stands, and drives off forwards.
+  const SyntheticScenario s =
+      loadScenario(writeTemp("reversing.yaml",
+                             "ego: {parked: {x: 0, y: 0}}\n"
+                             "actors:\n"
+                             "  - {type: Car, size: [4.3, 1.8, 1.5], waypoints: [[1, 20, -6, "
+                             "-1.5708], [3, 20, -4, -1.5708], [5, 22, -2, 0], [6, 22, -2, 0], "
+                             "[8, 32, -2, 0]]}\n"));
+  const Trajectory& car = s.actors.at(0).trajectory;
+  EXPECT_NEAR(car.poseAt(0.0).yaw, -1.5708, 1e-9);  // standing before the first waypoint
+  const Pose2D reversing = car.poseAt(2.0);
+  EXPECT_DOUBLE_EQ(reversing.y, -5.0);
+  EXPECT_NEAR(reversing.yaw, -1.5708, 1e-9);  // moving along +y, heading −y
+  EXPECT_NEAR(car.velocityAt(2.0).y(), 1.0, 1e-9);
+  EXPECT_NEAR(car.poseAt(4.0).yaw, -0.7854, 1e-9);  // heading interpolated between waypoints
+  EXPECT_NEAR(car.poseAt(5.5).yaw, 0.0, 1e-9);
+  EXPECT_NEAR(car.velocityAt(7.0).x(), 5.0, 1e-9);
+  EXPECT_NEAR(car.poseAt(9.0).x, 32.0, 1e-9);
 }
 
 }  // namespace grid_vision_fusion

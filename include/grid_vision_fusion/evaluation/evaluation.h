@@ -12,11 +12,12 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/types.h"
+#include "grid_vision_fusion/fusion/fusion.h"
 
 namespace grid_vision_fusion
 {
@@ -73,6 +74,46 @@ struct ErrorStats
   std::vector<double> values;
 };
 
+/// Truth speed band of a matched object: static, the moving ones by truth speed over ground
+/// (0.5–1, 1–3, > 3 m/s; a moving object slower than 0.5 m/s, possible only with a lower dynamic
+/// threshold, falls in the first band), or unknown (truth motion unknown, or a moving object
+/// without a velocity).
+enum class SpeedBand : std::uint8_t
+{
+  kStatic = 0,
+  kBelow1 = 1,  ///< [0.5, 1) m/s
+  k1To3 = 2,    ///< [1, 3) m/s
+  kAbove3 = 3,  ///< >= 3 m/s
+  kUnknown = 4,
+};
+
+/// "static", "0.5-1", "1-3", ">3" or "unknown".
+std::string toString(SpeedBand band);
+
+/// The band of a ground-truth object (its motion and, when `has_state`, its speed [m/s]).
+SpeedBand speedBandOf(Motion truth_motion, bool has_state, double truth_speed_mps);
+
+/// One ground-truth object matched by class and IoU (whatever the motion): what the per-class
+/// and per-speed-band summaries of the motion and the state errors are made of.
+struct MatchedObject
+{
+  std::string frame;
+  std::string label;  ///< object class, e.g. "car"
+  Motion truth_motion = Motion::kUnknown;
+  Motion predicted_motion = Motion::kUnknown;
+  SpeedBand band = SpeedBand::kUnknown;
+  double truth_speed_mps = 0.0;  ///< |v_gt| [m/s] (0 without a ground-truth state)
+  double longitudinal_m = 0.0;   ///< of the ground truth [m]
+  bool has_state = false;        ///< both have a state: the errors below are valid, else NaN
+  double position_error_m = 0.0;
+  double speed_error_mps = 0.0;
+  double heading_error_rad = 0.0;  ///< NaN unless both are dynamic (as heading_error_rad below)
+};
+
+/// Predicted-motion counts of a set of matched objects, indexed by Motion (unknown, static,
+/// dynamic).
+using MotionCounts = std::array<std::size_t, 3>;
+
 /// Everything evaluate() measures.
 struct EvaluationResult
 {
@@ -84,6 +125,12 @@ struct EvaluationResult
   ErrorStats position_error_m;   ///< |p_det − p_gt| of matched objects with a state
   ErrorStats speed_error_mps;    ///< ||v_det| − |v_gt|| of matched objects with a state
   ErrorStats heading_error_rad;  ///< wrapped |heading_det − heading_gt|, both dynamic
+  /// Every match of motion_confusion, in matching order (classes by name, detections by score).
+  std::vector<MatchedObject> matched_objects;
+  /// Per class: motion_confusion of that class's matches.
+  std::map<std::string, std::array<std::array<std::size_t, 3>, 3>> motion_confusion_by_class;
+  /// Per class, then per truth speed band: the predicted-motion counts of the matches.
+  std::map<std::string, std::map<SpeedBand, MotionCounts>> motion_by_class_and_band;
 };
 
 /// Class name of an object: "dynamicCar" for (kDynamic, "car") when `with_motion`, else "car".

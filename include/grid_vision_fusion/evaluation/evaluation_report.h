@@ -11,8 +11,16 @@
 
 namespace grid_vision_fusion
 {
-/// The result as JSON: per class figures and curves, mAP, confusion matrix, error statistics.
+/// The result as JSON: per class figures and curves, mAP, confusion matrix, per object class the
+/// confusion matrix and the predicted-motion counts per truth speed band ("motion_by_class"),
+/// error statistics.
 std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config);
+
+/// Every matched object of the motion confusion as CSV, one line each after the header
+/// frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,
+/// position_error_m,speed_error_mps,heading_error_rad (motions unknown/static/dynamic; bands as
+/// toString(SpeedBand); errors empty where the match has none): for summaries over several runs.
+std::string matchesCsv(const EvaluationResult& result);
 
 /// A Markdown report: Table I (precision, recall, F1 per class, in percent), Table II (AP per
 /// class and mAP), the motion confusion matrix and the error statistics.
@@ -35,8 +43,8 @@ cv::Mat drawPrCurve(const ClassMetrics& metrics);
 cv::Mat drawHistogram(const ErrorStats& stats, const std::string& title, const std::string& unit,
                       int bins = 20);
 
-/// Writes metrics.json, report.md, the Cartucho folders, pr_<class>.png for every class and
-/// hist_position.png, hist_speed.png, hist_heading.png into `dir` (created if needed).
+/// Writes metrics.json, report.md, matches.csv, the Cartucho folders, pr_<class>.png for every
+/// class and hist_position.png, hist_speed.png, hist_heading.png into `dir` (created if needed).
 /// @throws std::runtime_error naming a file that cannot be written.
 void writeEvaluationOutputs(const std::string& dir, const EvaluationResult& result,
                             const EvaluationConfig& config, const std::vector<EvalObject>& ground_truth,

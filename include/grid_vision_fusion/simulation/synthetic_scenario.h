@@ -34,7 +34,9 @@ struct SyntheticScenario
 /// Reads a scenario YAML file. Keys: seed, duration, frame_rate, road {center_y, half_width,
 /// lane_width}, lidar {azimuth_steps, range_noise_std, dropout, min_range, max_range}, ego and
 /// every entry of actors with one motion: `parked: {x, y, yaw}`, `waypoints: [[t, x, y], ...]`
-/// or `constant_turn: {x, y, yaw, speed, yaw_rate}`; actors also have type, size [l, w, h] and
+/// (yaw along the path, Trajectory::waypoints()), `waypoints: [[t, x, y, yaw], ...]` (yaw given
+/// in every waypoint, e.g. reversing; Trajectory::posed()) or
+/// `constant_turn: {x, y, yaw, speed, yaw_rate}`; actors also have type, size [l, w, h] and
 /// color "#RRGGBB"; scenery entries have x, y, yaw, size, color.
 /// @throws std::runtime_error naming the file and the entry at fault.
 SyntheticScenario loadScenario(const std::string& path);

@@ -1,0 +1,367 @@
+#!/usr/bin/env python3
+"""Summarises the evaluations of a scenario suite run (scripts/evaluate_suite.sh) into
+suite_report.md and suite_report.json, and checks them against thresholds.
+
+Input per scenario: the evaluation folder that `evaluate` wrote (its matches.csv: one line per
+ground-truth object matched by class and IoU within the range, with the truth motion, the truth
+speed band, the predicted motion and the state errors). Output, per scenario and over all of
+them, per class: the motion confusion with the moving objects split by truth speed band
+(0.5-1, 1-3, > 3 m/s), the position, speed and heading errors (median, 90th percentile), and the
+headline figures of issue 11 (moving objects >= 1 m/s found dynamic, overall and per class;
+static objects found static).
+
+usage: suite_report.py --output DIR --scenario NAME EVAL_DIR SECONDS [--scenario ...]
+                       [--wall-time S] [--cpu TEXT] [--thresholds FILE] [--junit FILE]
+
+Exit status: 0, 1 on bad input, 3 when a threshold is not met (the reports are written anyway).
+Python 3 standard library only.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import tempfile
+
+MOTIONS = ("unknown", "static", "dynamic")
+BANDS = ("static", "0.5-1", "1-3", ">3", "unknown")
+BAND_TITLES = {"static": "static", "0.5-1": "moving 0.5-1 m/s", "1-3": "moving 1-3 m/s",
+               ">3": "moving > 3 m/s", "unknown": "truth unknown"}
+MOVING_TARGET_BANDS = ("1-3", ">3")  # truth speed >= 1 m/s
+HEADLINE_CLASSES = ("car", "van", "truck", "pedestrian", "cyclist")
+CSV_COLUMNS = ("frame", "label", "truth_motion", "predicted_motion", "truth_band", "truth_speed_mps",
+               "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad")
+THRESHOLD_KEYS = {"min_moving_dynamic", "min_moving_dynamic_per_class", "min_static_static",
+                  "min_class_matches"}
+
+
+class InputError(Exception):
+    pass
+
+
+def quantile(sorted_values, q):
+    """Linear interpolation between closest ranks, as errorStats() of the evaluation."""
+    rank = q * (len(sorted_values) - 1)
+    lower = int(math.floor(rank))
+    upper = min(lower + 1, len(sorted_values) - 1)
+    return sorted_values[lower] + (rank - lower) * (sorted_values[upper] - sorted_values[lower])
+
+
+def error_stats(values):
+    values = sorted(values)
+    if not values:
+        return {"count": 0, "median": None, "p90": None}
+    return {"count": len(values), "median": quantile(values, 0.5), "p90": quantile(values, 0.9)}
+
+
+def read_matches(path):
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            if tuple(reader.fieldnames or ()) != CSV_COLUMNS:
+                raise InputError("%s: unexpected columns %s (expected %s)" % (path, reader.fieldnames,
+                                                                             ",".join(CSV_COLUMNS)))
+            rows = []
+            for line, row in enumerate(reader, start=2):
+                if row["truth_motion"] not in MOTIONS or row["predicted_motion"] not in MOTIONS \
+                        or row["truth_band"] not in BANDS:
+                    raise InputError("%s:%d: unknown motion or band" % (path, line))
+                rows.append(row)
+            return rows
+    except OSError as error:
+        raise InputError("cannot read %s: %s" % (path, error))
+
+
+def number(text):
+    return float(text) if text != "" else None
+
+
+class Tally:
+    """Predicted-motion counts per truth band and the errors of a set of matches."""
+
+    def __init__(self):
+        self.counts = {band: {m: 0 for m in MOTIONS} for band in BANDS}
+        self.position, self.speed, self.heading = [], [], []
+
+    def add(self, row):
+        self.counts[row["truth_band"]][row["predicted_motion"]] += 1
+        for values, key, scale in ((self.position, "position_error_m", 1.0),
+                                   (self.speed, "speed_error_mps", 1.0),
+                                   (self.heading, "heading_error_rad", 180.0 / math.pi)):
+            value = number(row[key])
+            if value is not None:
+                values.append(value * scale)
+
+    def total(self, bands=BANDS):
+        return sum(sum(self.counts[b].values()) for b in bands)
+
+    def right(self, bands):
+        """Matches of `bands` whose predicted motion is the truth's (static for static)."""
+        return sum(self.counts[b]["static" if b == "static" else "dynamic"] for b in bands)
+
+    def to_json(self):
+        return {"by_truth_band": {b: dict(self.counts[b]) for b in BANDS if sum(self.counts[b].values())},
+                "matches": self.total(),
+                "position_error_m": error_stats(self.position),
+                "speed_error_mps": error_stats(self.speed),
+                "heading_error_deg": error_stats(self.heading)}
+
+
+def fraction(found, total):
+    return {"found": found, "total": total, "fraction": (found / total) if total else None}
+
+
+def headline(tallies):
+    """Issue 11's figures from per-class tallies."""
+    all_classes = Tally()
+    for tally in tallies.values():
+        for band in BANDS:
+            for m in MOTIONS:
+                all_classes.counts[band][m] += tally.counts[band][m]
+    out = {"moving_ge1_dynamic": fraction(all_classes.right(MOVING_TARGET_BANDS),
+                                          all_classes.total(MOVING_TARGET_BANDS)),
+           "moving_ge1_dynamic_by_class": {},
+           "moving_0.5-1_dynamic": fraction(all_classes.right(("0.5-1",)), all_classes.total(("0.5-1",))),
+           "static_static": fraction(all_classes.right(("static",)), all_classes.total(("static",)))}
+    for label in sorted(set(HEADLINE_CLASSES) | set(tallies)):
+        tally = tallies.get(label, Tally())
+        out["moving_ge1_dynamic_by_class"][label] = fraction(tally.right(MOVING_TARGET_BANDS),
+                                                             tally.total(MOVING_TARGET_BANDS))
+    return out
+
+
+def summarise(rows):
+    tallies = {}
+    for row in rows:
+        tallies.setdefault(row["label"], Tally()).add(row)
+    return tallies
+
+
+def percent(f):
+    return "-" if f["fraction"] is None else "%.1f" % (100.0 * f["fraction"])
+
+
+def stat(s, decimals):
+    if not s["count"]:
+        return "-"
+    return "%.*f / %.*f" % (decimals, s["median"], decimals, s["p90"])
+
+
+def motion_table(tallies):
+    lines = ["| class | truth | matches | -> unknown | -> static | -> dynamic | right [%] |",
+             "|---|---|---|---|---|---|---|"]
+    for label in sorted(tallies):
+        tally = tallies[label]
+        for band in BANDS:
+            c = tally.counts[band]
+            n = sum(c.values())
+            if not n:
+                continue
+            right = "-" if band == "unknown" else percent(fraction(tally.right((band,)), n))
+            lines.append("| %s | %s | %d | %d | %d | %d | %s |" % (label, BAND_TITLES[band], n, c["unknown"],
+                                                                  c["static"], c["dynamic"], right))
+    return lines
+
+
+def error_table(tallies):
+    lines = ["| class | matches | position [m] median / p90 | speed [m/s] median / p90 | "
+             "heading [deg] median / p90 (both dynamic) |", "|---|---|---|---|---|"]
+    for label in sorted(tallies):
+        t = tallies[label]
+        lines.append("| %s | %d | %s | %s | %s |" % (label, t.total(), stat(error_stats(t.position), 2),
+                                                      stat(error_stats(t.speed), 2),
+                                                      stat(error_stats(t.heading), 1)))
+    return lines
+
+
+def headline_table(h, thresholds):
+    def target(key, label=None):
+        value = thresholds.get(key)
+        if isinstance(value, dict):
+            value = value.get(label)
+        elif label is not None and label not in HEADLINE_CLASSES:
+            value = None
+        return "" if value is None else "%.1f" % (100.0 * value)
+
+    lines = ["| figure | found | of | % | threshold [%] |", "|---|---|---|---|---|"]
+    f = h["moving_ge1_dynamic"]
+    lines.append("| moving >= 1 m/s found dynamic, all classes | %d | %d | %s | %s |"
+                 % (f["found"], f["total"], percent(f), target("min_moving_dynamic")))
+    for label, f in h["moving_ge1_dynamic_by_class"].items():
+        lines.append("| moving >= 1 m/s found dynamic, %s | %d | %d | %s | %s |"
+                     % (label, f["found"], f["total"], percent(f), target("min_moving_dynamic_per_class", label)))
+    f = h["static_static"]
+    lines.append("| static found static | %d | %d | %s | %s |" % (f["found"], f["total"], percent(f),
+                                                                 target("min_static_static")))
+    f = h["moving_0.5-1_dynamic"]
+    lines.append("| moving 0.5-1 m/s found dynamic (reported, not targeted) | %d | %d | %s | |"
+                 % (f["found"], f["total"], percent(f)))
+    return lines
+
+
+def check(h, thresholds):
+    """The threshold checks: list of (name, passed, message)."""
+    checks = []
+
+    def add(name, f, minimum):
+        if f["total"] == 0:
+            checks.append((name, False, "%s: no match to measure (threshold %.3f)" % (name, minimum)))
+            return
+        ok = f["fraction"] >= minimum
+        checks.append((name, ok, "%s: %d of %d = %.3f %s %.3f" % (name, f["found"], f["total"], f["fraction"],
+                                                                   ">=" if ok else "<", minimum)))
+
+    if thresholds.get("min_moving_dynamic") is not None:
+        add("moving_ge1_dynamic", h["moving_ge1_dynamic"], thresholds["min_moving_dynamic"])
+    per_class = thresholds.get("min_moving_dynamic_per_class")
+    if per_class is not None:
+        least = thresholds.get("min_class_matches", 1)
+        if not isinstance(per_class, dict):
+            per_class = {label: per_class for label in HEADLINE_CLASSES}
+        for label, minimum in sorted(per_class.items()):
+            f = h["moving_ge1_dynamic_by_class"].get(label, fraction(0, 0))
+            if f["total"] >= max(least, 1):
+                add("moving_ge1_dynamic_" + label, f, minimum)
+    if thresholds.get("min_static_static") is not None:
+        add("static_static", h["static_static"], thresholds["min_static_static"])
+    return checks
+
+
+def read_thresholds(path):
+    if not path:
+        return {}
+    try:
+        with open(path) as f:
+            values = json.load(f)
+    except (OSError, ValueError) as error:
+        raise InputError("cannot read the thresholds %s: %s" % (path, error))
+    if not isinstance(values, dict):
+        raise InputError("%s: expected a JSON object" % path)
+    values = {k: v for k, v in values.items() if not k.startswith("_")}  # "_comment" keys
+    unknown = set(values) - THRESHOLD_KEYS
+    if unknown:
+        raise InputError("%s: unknown keys %s (known: %s)" % (path, sorted(unknown), sorted(THRESHOLD_KEYS)))
+    def fraction_ok(value):
+        return isinstance(value, (int, float)) and not isinstance(value, bool) and 0 <= value <= 1
+
+    for key, value in values.items():
+        if key == "min_class_matches":
+            ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
+        elif key == "min_moving_dynamic_per_class" and isinstance(value, dict):
+            ok = bool(value) and all(fraction_ok(v) for v in value.values())
+        else:
+            ok = fraction_ok(value)
+        if not ok:
+            raise InputError("%s: %s must be a fraction in [0, 1] (min_moving_dynamic_per_class: or an object "
+                             "class -> fraction; min_class_matches: an integer >= 0)" % (path, key))
+    return values
+
+
+def junit(checks, scenarios):
+    from xml.sax.saxutils import escape, quoteattr
+    failures = sum(1 for _, ok, _ in checks if not ok)
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             '<testsuite name="scenario_suite" tests="%d" failures="%d" errors="0">' % (len(checks), failures)]
+    for name, ok, message in checks:
+        lines.append('  <testcase classname="scenario_suite" name=%s time="0">' % quoteattr(name))
+        if not ok:
+            lines.append('    <failure message=%s>%s</failure>' % (quoteattr(message), escape(message)))
+        lines.append("  </testcase>")
+    lines.append("  <system-out>%s</system-out>" % escape("scenarios: " + ", ".join(scenarios)))
+    lines.append("</testsuite>")
+    return "\n".join(lines) + "\n"
+
+
+def write_atomically(path, text):
+    directory = os.path.dirname(os.path.abspath(path))
+    os.makedirs(directory, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_" + os.path.basename(path))
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--output", required=True, help="folder for suite_report.md and suite_report.json")
+    parser.add_argument("--scenario", nargs=3, action="append", metavar=("NAME", "EVAL_DIR", "SECONDS"),
+                        required=True, help="a scenario, the evaluate output folder, its wall time")
+    parser.add_argument("--wall-time", type=float, help="wall time of the whole run [s]")
+    parser.add_argument("--jobs", type=int, help="scenarios run in parallel")
+    parser.add_argument("--cpu", default="", help="CPU model, for the report")
+    parser.add_argument("--thresholds", help="JSON object with any of " + ", ".join(sorted(THRESHOLD_KEYS)) +
+                        " (keys starting with _ are comments)")
+    parser.add_argument("--junit", help="also write the threshold checks as a JUnit XML file")
+    args = parser.parse_args(argv)
+    try:
+        thresholds = read_thresholds(args.thresholds)
+        scenarios = []
+        for name, folder, seconds in args.scenario:
+            try:
+                seconds = float(seconds)
+            except ValueError:
+                raise InputError("scenario %s: SECONDS must be a number, got %r" % (name, seconds))
+            rows = read_matches(os.path.join(folder, "matches.csv"))
+            scenarios.append((name, seconds, rows))
+    except InputError as error:
+        print("suite_report: %s" % error, file=sys.stderr)
+        return 1
+
+    overall_rows = [row for _, _, rows in scenarios for row in rows]
+    overall = summarise(overall_rows)
+    overall_headline = headline(overall)
+    checks = check(overall_headline, thresholds)
+
+    report = {"matching": "ground truth matched by class and IoU >= 0.5, objects up to 30 m ahead "
+                          "(evaluate's defaults); truth dynamic above 0.5 m/s",
+              "cpu": args.cpu, "wall_time_s": args.wall_time, "jobs": args.jobs,
+              "headline": overall_headline,
+              "overall": {label: t.to_json() for label, t in sorted(overall.items())},
+              "scenarios": [], "thresholds": thresholds,
+              "checks": [{"name": n, "passed": ok, "message": m} for n, ok, m in checks]}
+    md = ["# Scenario suite report", "",
+          "%d scenarios; objects matched to the ground truth by class and IoU >= 0.5, up to 30 m ahead; "
+          "truth dynamic above 0.5 m/s; detector: replay of the drives' labels (oracle boxes)." % len(scenarios)]
+    if args.wall_time is not None:
+        md.append("Wall time %.0f s%s%s." % (args.wall_time, " with %d jobs" % args.jobs if args.jobs else "",
+                                             " on " + args.cpu if args.cpu else ""))
+    md += ["", "## Headline (issue 11's figures)", ""] + headline_table(overall_headline, thresholds)
+    if checks:
+        md += ["", "Thresholds: " + ("all met" if all(ok for _, ok, _ in checks) else "NOT MET: " + "; ".join(
+            m for _, ok, m in checks if not ok)) + "."]
+    md += ["", "## All scenarios: motion per class and truth speed band", ""] + motion_table(overall)
+    md += ["", "## All scenarios: state errors per class", ""] + error_table(overall)
+    md += ["", "## Per scenario", "",
+           "| scenario | matches | moving >= 1 m/s found dynamic [%] | static found static [%] | "
+           "moving 0.5-1 m/s found dynamic [%] | wall time [s] |", "|---|---|---|---|---|---|"]
+    details = []
+    for name, seconds, rows in scenarios:
+        tallies = summarise(rows)
+        h = headline(tallies)
+        report["scenarios"].append({"name": name, "wall_time_s": seconds, "matches": len(rows), "headline": h,
+                                    "classes": {label: t.to_json() for label, t in sorted(tallies.items())}})
+        md.append("| %s | %d | %s (%d/%d) | %s (%d/%d) | %s (%d/%d) | %.0f |" % (
+            name, len(rows), percent(h["moving_ge1_dynamic"]), h["moving_ge1_dynamic"]["found"],
+            h["moving_ge1_dynamic"]["total"], percent(h["static_static"]), h["static_static"]["found"],
+            h["static_static"]["total"], percent(h["moving_0.5-1_dynamic"]), h["moving_0.5-1_dynamic"]["found"],
+            h["moving_0.5-1_dynamic"]["total"], seconds))
+        details += ["", "### %s" % name, ""] + motion_table(tallies) + [""] + error_table(tallies)
+    md += details
+
+    try:
+        os.makedirs(args.output, exist_ok=True)
+        write_atomically(os.path.join(args.output, "suite_report.json"), json.dumps(report, indent=2) + "\n")
+        write_atomically(os.path.join(args.output, "suite_report.md"), "\n".join(md) + "\n")
+        if args.junit:
+            write_atomically(args.junit, junit(checks, [s[0] for s in scenarios]))
+    except OSError as error:
+        print("suite_report: cannot write the report: %s" % error, file=sys.stderr)
+        return 1
+    for _, ok, message in checks:
+        print("suite_report: %s %s" % ("ok    " if ok else "FAILED", message))
+    return 0 if all(ok for _, ok, _ in checks) else 3
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,220 @@
+#!/usr/bin/env python3
+"""Tests of scripts/suite_report.py (the scenario suite's summary) on small hand-made
+matches.csv files, and of scripts/evaluate_suite.sh's handling of bad input (with --devel: the
+devel space of a built catkin workspace).
+
+usage: test_suite_report.py [--junit FILE] [--devel DIR]
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+from xml.sax.saxutils import escape, quoteattr
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import suite_report  # noqa: E402
+
+HEADER = ("frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
+          "position_error_m,speed_error_mps,heading_error_rad\n")
+DEVEL = None
+
+
+def row(label, truth, predicted, band, speed=0.0, position="1.000", speed_error="0.100", heading=""):
+    return "f,%s,%s,%s,%s,%.3f,10.00,%s,%s,%s\n" % (label, truth, predicted, band, speed, position, speed_error,
+                                                    heading)
+
+
+class SuiteReportTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.tmp = self.dir.name
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def scenario(self, name, rows):
+        folder = os.path.join(self.tmp, name)
+        os.makedirs(folder)
+        with open(os.path.join(folder, "matches.csv"), "w") as f:
+            f.write(HEADER + "".join(rows))
+        return ["--scenario", name, folder, "12"]
+
+    def thresholds(self, values):
+        path = os.path.join(self.tmp, "thresholds.json")
+        with open(path, "w") as f:
+            json.dump(values, f)
+        return path
+
+    def run_report(self, args):
+        out = os.path.join(self.tmp, "out")
+        return suite_report.main(["--output", out] + args), out
+
+    def two_scenarios(self):
+        a = self.scenario("a", [row("car", "static", "static", "static"),
+                                row("car", "static", "dynamic", "static"),
+                                row("car", "dynamic", "dynamic", ">3", 8.0, heading="0.0175"),
+                                row("car", "dynamic", "static", "1-3", 1.5),
+                                row("pedestrian", "dynamic", "dynamic", "1-3", 1.2, heading="0.0349"),
+                                row("pedestrian", "dynamic", "static", "0.5-1", 0.7)])
+        b = self.scenario("b", [row("car", "dynamic", "unknown", ">3", 5.0, position="", speed_error=""),
+                                row("cyclist", "dynamic", "dynamic", ">3", 4.0, position="3.000"),
+                                row("car", "unknown", "static", "unknown")])
+        return a + b
+
+    def test_quantiles_as_the_evaluation(self):
+        # errorStats() of the evaluation: 0 0 1 sqrt(2) 4 -> median 1, p90 sqrt(2) + .6 (4 - sqrt(2)).
+        s = suite_report.error_stats([4.0, 0.0, 1.0, math.sqrt(2.0), 0.0])
+        self.assertEqual(s["count"], 5)
+        self.assertAlmostEqual(s["median"], 1.0)
+        self.assertAlmostEqual(s["p90"], math.sqrt(2.0) + 0.6 * (4.0 - math.sqrt(2.0)))
+        self.assertEqual(suite_report.error_stats([])["count"], 0)
+
+    def test_headline_and_tables(self):
+        status, out = self.run_report(self.two_scenarios())
+        self.assertEqual(status, 0)
+        with open(os.path.join(out, "suite_report.json")) as f:
+            report = json.load(f)
+        h = report["headline"]
+        # Moving >= 1 m/s: car >3 (dynamic), car 1-3 (static), pedestrian 1-3 (dynamic), car >3
+        # (unknown), cyclist >3 (dynamic) -> 3 of 5; the 0.5-1 and unknown bands are left out.
+        self.assertEqual((h["moving_ge1_dynamic"]["found"], h["moving_ge1_dynamic"]["total"]), (3, 5))
+        self.assertEqual(h["moving_ge1_dynamic_by_class"]["car"], {"found": 1, "total": 3, "fraction": 1 / 3})
+        self.assertEqual(h["moving_ge1_dynamic_by_class"]["van"]["total"], 0)  # listed, absent
+        self.assertEqual((h["static_static"]["found"], h["static_static"]["total"]), (1, 2))
+        self.assertEqual((h["moving_0.5-1_dynamic"]["found"], h["moving_0.5-1_dynamic"]["total"]), (0, 1))
+        car = report["overall"]["car"]
+        self.assertEqual(car["matches"], 6)
+        self.assertEqual(car["by_truth_band"][">3"], {"unknown": 1, "static": 0, "dynamic": 1})
+        self.assertEqual(car["by_truth_band"]["unknown"], {"unknown": 0, "static": 1, "dynamic": 0})
+        self.assertEqual(car["position_error_m"]["count"], 5)  # one match without a state
+        self.assertAlmostEqual(report["overall"]["pedestrian"]["heading_error_deg"]["median"], 2.0, places=2)
+        self.assertEqual([s["name"] for s in report["scenarios"]], ["a", "b"])
+        self.assertEqual(report["scenarios"][1]["headline"]["moving_ge1_dynamic"]["total"], 2)
+        with open(os.path.join(out, "suite_report.md")) as f:
+            md = f.read()
+        self.assertIn("| moving >= 1 m/s found dynamic, all classes | 3 | 5 | 60.0 |", md)
+        self.assertIn("| car | moving 1-3 m/s | 1 | 0 | 1 | 0 | 0.0 |", md)
+        self.assertIn("| a | 6 | 66.7 (2/3) | 50.0 (1/2) | 0.0 (0/1) | 12 |", md)
+        self.assertIn("### b", md)
+
+    def test_thresholds_pass_and_fail(self):
+        args = self.two_scenarios()
+        junit = os.path.join(self.tmp, "junit.xml")
+        ok = self.thresholds({"_comment": "x", "min_moving_dynamic": 0.6, "min_static_static": 0.5})
+        self.assertEqual(self.run_report(args + ["--thresholds", ok, "--junit", junit])[0], 0)
+        with open(junit) as f:
+            self.assertIn('tests="2" failures="0"', f.read())
+        # Per class with a minimum number of matches: car (3 matches) is checked and fails,
+        # pedestrian (1) and cyclist (1) are not.
+        bad = self.thresholds({"min_moving_dynamic_per_class": {"car": 0.5, "pedestrian": 0.9, "cyclist": 0.9},
+                               "min_class_matches": 2})
+        status, out = self.run_report(args + ["--thresholds", bad, "--junit", junit])
+        self.assertEqual(status, 3)
+        with open(junit) as f:
+            xml = f.read()
+        self.assertIn('tests="1" failures="1"', xml)
+        self.assertIn("moving_ge1_dynamic_car: 1 of 3 = 0.333 &lt; 0.500", xml)
+        self.assertTrue(os.path.exists(os.path.join(out, "suite_report.md")))  # written anyway
+        one_for_all = self.thresholds({"min_moving_dynamic_per_class": 0.9})
+        status, _ = self.run_report(args + ["--thresholds", one_for_all, "--junit", junit])
+        self.assertEqual(status, 3)
+        with open(junit) as f:
+            self.assertIn('tests="3" failures="1"', f.read())  # car fails; pedestrian, cyclist 1 of 1
+
+    def test_bad_input(self):
+        args = self.two_scenarios()
+        self.assertEqual(self.run_report(args + ["--thresholds", self.thresholds({"min_typo": 0.5})])[0], 1)
+        self.assertEqual(self.run_report(args + ["--thresholds", self.thresholds({"min_static_static": 2})])[0], 1)
+        folder = os.path.join(self.tmp, "broken")
+        os.makedirs(folder)
+        with open(os.path.join(folder, "matches.csv"), "w") as f:
+            f.write("frame,label\nf,car\n")
+        status, out = self.run_report(["--scenario", "broken", folder, "1"])
+        self.assertEqual(status, 1)
+        self.assertFalse(os.path.exists(os.path.join(out, "suite_report.md")))
+        self.assertEqual(self.run_report(["--scenario", "missing", os.path.join(self.tmp, "nowhere"), "1"])[0], 1)
+
+
+class EvaluateSuiteScriptTest(unittest.TestCase):
+    def setUp(self):
+        if not DEVEL:
+            self.skipTest("no --devel: evaluate_suite.sh's checks need the built tools")
+
+    def run_suite(self, *args):
+        return subprocess.run([os.path.join(ROOT, "scripts", "evaluate_suite.sh"), "--devel", DEVEL] +
+                              list(args), capture_output=True, text=True)
+
+    def test_unknown_scenario_is_a_usage_error(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            result = self.run_suite("--scenarios", "no_such_scenario", "--output", tmp)
+            self.assertEqual(result.returncode, 2)
+            self.assertIn("unknown scenario 'no_such_scenario'; available: ", result.stderr)
+            self.assertIn("pedestrians_crossing", result.stderr)
+
+    def test_a_failing_step_names_the_scenario_and_its_log(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            scenarios = os.path.join(tmp, "scenarios")
+            os.makedirs(scenarios)
+            with open(os.path.join(scenarios, "broken.yaml"), "w") as f:
+                f.write("duration: 1.0\n")  # no ego: make_synthetic_drive refuses it
+            out = os.path.join(tmp, "out")
+            result = self.run_suite("--scenario-dir", scenarios, "--output", out)
+            self.assertEqual(result.returncode, 1)
+            log = os.path.join(out, "logs", "broken.log")
+            self.assertIn("scenario broken: make_synthetic_drive failed, see " + log, result.stderr)
+            self.assertIn("[1/1] broken ... FAILED at make_synthetic_drive", result.stdout)
+            with open(log) as f:
+                self.assertIn("missing key 'ego'", f.read())
+            self.assertEqual(sorted(os.listdir(out)), ["logs"])  # no report, no partial outputs
+
+
+def write_junit(path, result, tests):
+    failed = {test.id(): message for test, message in result.failures + result.errors}
+    skipped = {test.id() for test, _ in result.skipped}
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             '<testsuite name="test_suite_report" tests="%d" failures="%d" errors="0">' % (len(tests), len(failed))]
+    for test in tests:
+        classname, name = test.id().rsplit(".", 1)
+        lines.append('  <testcase classname=%s name=%s time="0">' % (quoteattr(classname), quoteattr(name)))
+        if test.id() in failed:
+            lines.append('    <failure message="failed">%s</failure>' % escape(failed[test.id()]))
+        elif test.id() in skipped:
+            lines.append("    <skipped/>")
+        lines.append("  </testcase>")
+    lines.append("</testsuite>")
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def main():
+    global DEVEL
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--junit")
+    parser.add_argument("--devel")
+    args = parser.parse_args()
+    DEVEL = args.devel
+    suite = unittest.defaultTestLoader.loadTestsFromModule(sys.modules[__name__])
+    tests = []
+
+    def flatten(s):
+        for t in s:
+            if isinstance(t, unittest.TestSuite):
+                flatten(t)
+            else:
+                tests.append(t)
+
+    flatten(suite)
+    result = unittest.TextTestRunner(verbosity=2).run(unittest.TestSuite(tests))
+    if args.junit:
+        write_junit(args.junit, result, tests)
+    return 0 if result.wasSuccessful() else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
