@@ -22,7 +22,7 @@ gvf_gtest(test_projection
   SOURCES test/projection/test_grid_projection.cpp
   LINK grid_vision_fusion_core grid_vision_fusion_kitti)
 gvf_gtest(test_fusion
-  SOURCES test/fusion/test_fusion.cpp test/fusion/test_overlay.cpp
+  SOURCES test/fusion/test_fusion.cpp test/fusion/test_overlay.cpp test/fusion/test_assignment.cpp
   LINK grid_vision_fusion_core)
 
 # --- workshop libraries ------------------------------------------------------------------------
