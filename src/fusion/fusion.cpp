@@ -79,8 +79,15 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const std::vector<std
       ++object.static_points;
     }
   }
-  object.x = median(xs);
-  object.y = median(ys);
+  object.median_x = median(xs);
+  object.median_y = median(ys);
+  object.x = object.median_x;
+  object.y = object.median_y;
+  object.members.reserve(members.size());
+  for (std::size_t i : members)
+  {
+    object.members.push_back(static_cast<std::uint32_t>(i));
+  }
   object.motion = decideMotion(object.static_points, object.dynamic_points, config);
   if (object.motion == Motion::kDynamic)
   {
@@ -108,6 +115,24 @@ TieRule tieRuleFromString(const std::string& name)
   }
   throw std::invalid_argument("tie_rule must be \"static\", \"dynamic\" or \"unknown\", got \"" + name +
                               "\"");
+}
+
+PositionSource positionSourceFromString(const std::string& name)
+{
+  if (name == "centre")
+  {
+    return PositionSource::kCentre;
+  }
+  if (name == "median")
+  {
+    return PositionSource::kMedian;
+  }
+  throw std::invalid_argument("position must be \"centre\" or \"median\", got \"" + name + "\"");
+}
+
+std::string toString(PositionSource source)
+{
+  return source == PositionSource::kCentre ? "centre" : "median";
 }
 
 std::string toString(TieRule rule)
@@ -142,6 +167,7 @@ void FusionConfig::validate() const
   {
     throw std::invalid_argument("min_points must be >= 1, got " + std::to_string(min_points));
   }
+  centre.validate();
 }
 
 void ProjectedPoints::add(float pu, float pv, float px, float py, float pvx, float pvy, CellState s)
@@ -269,6 +295,7 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
     if (!members[d].empty())
     {
       result.objects.push_back(pointwiseFeatures(d, members[d], points, config));
+      result.objects.back().id = static_cast<std::uint32_t>(result.objects.size() - 1);
     }
   }
   return result;

@@ -91,7 +91,12 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
   {
     *invalid_cells = cells.cells_invalid;
   }
-  return projectedGridToMsg(std::move(cells), info.header, grid.header, *camera);
+  ProjectedGrid::Ptr msg = projectedGridToMsg(std::move(cells), info.header, grid.header, *camera);
+  const Eigen::Vector3d camera_position = geometry.camera_from_grid.inverse().translation();
+  msg->camera_position.x = camera_position.x();
+  msg->camera_position.y = camera_position.y();
+  msg->camera_position.z = camera_position.z();
+  return msg;
 }
 
 }  // namespace grid_vision_fusion

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/fusion/object_centre.h"
 #include "grid_vision_fusion/types.h"
 
 namespace grid_vision_fusion
@@ -22,6 +23,18 @@ enum class TieRule
 TieRule tieRuleFromString(const std::string& name);
 /// The name parsed by tieRuleFromString().
 std::string toString(TieRule rule);
+
+/// Which point of a fusion region is reported as the object's position.
+enum class PositionSource
+{
+  kCentre,  ///< the object's centre: estimateCentres()
+  kMedian,  ///< the paper's component-wise median of the region's cells (its near face)
+};
+
+/// Parses "centre" or "median". @throws std::invalid_argument otherwise.
+PositionSource positionSourceFromString(const std::string& name);
+/// The name parsed by positionSourceFromString().
+std::string toString(PositionSource source);
 
 /// Parameters of the fusion region and of the point-wise feature processing.
 struct FusionConfig
@@ -42,9 +55,13 @@ struct FusionConfig
   /// touches the ground lower in the image stands nearer to the camera and hides the others.
   /// Equal y_max: the higher score wins, then the earlier detection.
   bool exclusive_assignment = false;
+  /// What the fusion stage reports as the position (fuse() itself always gives the median).
+  PositionSource position = PositionSource::kCentre;
+  /// The centre estimate (used with PositionSource::kCentre).
+  CentreConfig centre;
 
   /// @throws std::invalid_argument naming the first bad field (band fractions must be finite
-  ///         and in [0, 10], min_points >= 1).
+  ///         and in [0, 10], min_points >= 1, centre as CentreConfig::validate()).
   void validate() const;
 };
 
@@ -78,14 +95,19 @@ struct FusionRegion
 struct FusedObject
 {
   std::size_t detection_index = 0;  ///< index of the box in the detection list
+  /// The object's id: its index in FusionResult::objects from fuse(), the track id once tracked.
+  std::uint32_t id = 0;
   Motion motion = Motion::kUnknown;
   std::uint32_t static_points = 0;
   std::uint32_t dynamic_points = 0;
-  double x = 0.0;        ///< median x of all region points [m]
-  double y = 0.0;        ///< median y of all region points [m]
-  double vx = 0.0;       ///< median vx of the dynamic points [m/s]; 0 unless kDynamic
-  double vy = 0.0;       ///< median vy of the dynamic points [m/s]; 0 unless kDynamic
-  double heading = 0.0;  ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+  double x = 0.0;         ///< reported position x [m]: median_x from fuse(), then centre or track
+  double y = 0.0;         ///< reported position y [m]
+  double median_x = 0.0;  ///< median x of all region points [m] (the paper's position)
+  double median_y = 0.0;  ///< median y of all region points [m]
+  double vx = 0.0;        ///< median vx of the dynamic points [m/s]; 0 unless kDynamic
+  double vy = 0.0;        ///< median vy of the dynamic points [m/s]; 0 unless kDynamic
+  double heading = 0.0;   ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+  std::vector<std::uint32_t> members;  ///< indices of the region's valid points
 
   double speed() const;
 };
@@ -108,11 +130,21 @@ double median(std::vector<double>& values);
 Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, const FusionConfig& config);
 
 /// Fuses the detector boxes with the projected grid points: builds the fusion region of every
-/// box, collects the valid points inside it and computes its point-wise features. Regions
-/// without any point are discarded. Points with a non-finite u, v, x or y, a non-finite
+/// box, collects the valid points inside it and computes its point-wise features (position:
+/// the median, whatever config.position says). Regions without any point are discarded; ids
+/// are 0, 1, 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
 /// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
                   const FusionConfig& config);
+
+/// Sets the position (x, y) of every object of `result` to its centre: estimateCentre() over its
+/// members, with the footprint of its detection's label (config.footprints), seen from the
+/// camera at (`camera_x`, `camera_y`) in the frame of the points [m]. median_x, median_y stay.
+/// @throws std::invalid_argument when an object's detection_index or members do not fit
+///         `detections` and `points`.
+void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
+                     const ProjectedPointsView& points, double camera_x, double camera_y,
+                     const CentreConfig& config);
 
 /// Checks that a detections/points pair can be fused: boxes finite, x_min <= x_max,
 /// y_min <= y_max and inside the image (1 px tolerance), and the image sizes of both inputs

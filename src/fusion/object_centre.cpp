@@ -1,0 +1,351 @@
+#include "grid_vision_fusion/fusion/object_centre.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "grid_vision_fusion/fusion/fusion.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kMinEdgeDistanceM = 0.05;  // closeness criterion: nearer points count as this near
+constexpr double kCoarseStepRad = M_PI / 20.0;
+constexpr double kFineStepRad = M_PI / 180.0;
+/// A cell counts fully up to this fraction of the box height below the bottom edge, then less
+/// (Gaussian with this fraction as σ).
+constexpr double kBelowToleranceFraction = 0.05;
+
+/// Closeness score of the bounding rectangle at orientation `theta` (higher is better).
+double closeness(const std::vector<double>& x, const std::vector<double>& y, double theta)
+{
+  const double c = std::cos(theta);
+  const double s = std::sin(theta);
+  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min, b_min = a_min, b_max = -a_min;
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    const double a = c * x[i] + s * y[i];
+    const double b = -s * x[i] + c * y[i];
+    a_min = std::min(a_min, a);
+    a_max = std::max(a_max, a);
+    b_min = std::min(b_min, b);
+    b_max = std::max(b_max, b);
+  }
+  double score = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    const double a = c * x[i] + s * y[i];
+    const double b = -s * x[i] + c * y[i];
+    const double d = std::min(std::min(a - a_min, a_max - a), std::min(b - b_min, b_max - b));
+    score += 1.0 / std::max(d, kMinEdgeDistanceM);
+  }
+  return score;
+}
+
+/// Union-find over point indices 0..n-1 (path halving, union by index: deterministic).
+class DisjointSets
+{
+public:
+  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0U); }
+  std::size_t find(std::size_t i)
+  {
+    while (parent_[i] != i)
+    {
+      parent_[i] = parent_[parent_[i]];
+      i = parent_[i];
+    }
+    return i;
+  }
+  void unite(std::size_t a, std::size_t b)
+  {
+    a = find(a);
+    b = find(b);
+    if (a != b)
+    {
+      parent_[std::max(a, b)] = std::min(a, b);
+    }
+  }
+
+private:
+  std::vector<std::size_t> parent_;
+};
+
+/// Cluster label (the smallest member's index) of every point, single linkage at `distance`.
+std::vector<std::size_t> clusterPoints(const std::vector<double>& x, const std::vector<double>& y,
+                                       double distance)
+{
+  const std::size_t n = x.size();
+  DisjointSets sets(n);
+  // Buckets of side `distance`: linked points lie in the same or a neighbouring bucket.
+  auto key = [distance](double px, double py)
+  {
+    const auto bx = static_cast<std::int64_t>(std::floor(px / distance));
+    const auto by = static_cast<std::int64_t>(std::floor(py / distance));
+    return std::make_pair(bx, by);
+  };
+  struct PairHash
+  {
+    std::size_t operator()(const std::pair<std::int64_t, std::int64_t>& k) const
+    {
+      return std::hash<std::int64_t>()(k.first * 73856093LL ^ k.second * 19349663LL);
+    }
+  };
+  std::unordered_map<std::pair<std::int64_t, std::int64_t>, std::vector<std::size_t>, PairHash> buckets;
+  buckets.reserve(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    buckets[key(x[i], y[i])].push_back(i);
+  }
+  const double d2 = distance * distance;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const auto [bx, by] = key(x[i], y[i]);
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+    {
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+      {
+        const auto bucket = buckets.find({bx + dx, by + dy});
+        if (bucket == buckets.end())
+        {
+          continue;
+        }
+        for (std::size_t j : bucket->second)
+        {
+          if (j > i && (x[i] - x[j]) * (x[i] - x[j]) + (y[i] - y[j]) * (y[i] - y[j]) <= d2)
+          {
+            sets.unite(i, j);
+          }
+        }
+      }
+    }
+  }
+  std::vector<std::size_t> label(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    label[i] = sets.find(i);
+  }
+  return label;
+}
+
+/// The centre coordinate along one axis: cells observed in [lo, hi], the camera at `camera`, the
+/// object `dimension` long along it.
+double axisCentre(double lo, double hi, double camera, double dimension)
+{
+  if (hi - lo >= dimension)
+  {
+    return 0.5 * (lo + hi);
+  }
+  if (camera < lo)
+  {
+    return lo + 0.5 * dimension;
+  }
+  if (camera > hi)
+  {
+    return hi - 0.5 * dimension;
+  }
+  return 0.5 * (lo + hi);
+}
+}  // namespace
+
+void CentreConfig::validate() const
+{
+  if (!std::isfinite(cluster_distance) || cluster_distance <= 0.0)
+  {
+    throw std::invalid_argument("centre_cluster_distance must be a finite value > 0 m, got " +
+                                std::to_string(cluster_distance));
+  }
+  for (const auto& [label, footprint] : footprints)
+  {
+    if (label.empty())
+    {
+      throw std::invalid_argument("class_footprints: a label is empty");
+    }
+    if (!std::isfinite(footprint.length) || footprint.length <= 0.0 || !std::isfinite(footprint.width) ||
+        footprint.width <= 0.0)
+    {
+      std::ostringstream msg;
+      msg << "class_footprints/" << label << ": length and width must be finite values > 0 m, got "
+          << footprint.length << " x " << footprint.width;
+      throw std::invalid_argument(msg.str());
+    }
+  }
+}
+
+double fitOrientation(const std::vector<double>& x, const std::vector<double>& y)
+{
+  if (x.size() < 3 || x.size() != y.size())
+  {
+    return 0.0;
+  }
+  double best_theta = 0.0;
+  double best_score = -1.0;
+  for (double theta = 0.0; theta < M_PI / 2.0 - 1e-9; theta += kCoarseStepRad)
+  {
+    const double score = closeness(x, y, theta);
+    if (score > best_score)
+    {
+      best_score = score;
+      best_theta = theta;
+    }
+  }
+  const double coarse = best_theta;
+  const int fine_steps = static_cast<int>(std::floor(0.5 * kCoarseStepRad / kFineStepRad + 1e-9));
+  for (int k = -fine_steps; k <= fine_steps; ++k)
+  {
+    if (k == 0)
+    {
+      continue;
+    }
+    const double theta = coarse + k * kFineStepRad;
+    const double score = closeness(x, y, theta);
+    if (score > best_score)
+    {
+      best_score = score;
+      best_theta = theta;
+    }
+  }
+  // Back into [0, π/2): a rectangle at θ is the same as at θ ± π/2.
+  best_theta = std::fmod(best_theta + M_PI / 2.0, M_PI / 2.0);
+  return best_theta;
+}
+
+CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vector<std::uint32_t>& members,
+                              const BoundingBox& box, double camera_x, double camera_y,
+                              const Footprint* footprint, const CentreConfig& config)
+{
+  if (members.empty())
+  {
+    throw std::invalid_argument("estimateCentre: no points");
+  }
+  const std::size_t n = members.size();
+  std::vector<double> xs(n), ys(n);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    if (members[k] >= points.size)
+    {
+      throw std::invalid_argument("estimateCentre: point index " + std::to_string(members[k]) +
+                                  " outside the " + std::to_string(points.size) + " points");
+    }
+    xs[k] = points.x[members[k]];
+    ys[k] = points.y[members[k]];
+  }
+
+  // The object's cluster: the most cells at or above the bottom edge.
+  const std::vector<std::size_t> label = clusterPoints(xs, ys, config.cluster_distance);
+  const double sigma_px = kBelowToleranceFraction * std::max(static_cast<double>(box.height()), 1.0);
+  std::map<std::size_t, std::pair<double, float>> score_of;  // label -> (score, lowest row)
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const float v = points.v[members[k]];
+    const double below = std::max(static_cast<double>(v) - box.y_max - sigma_px, 0.0) / sigma_px;
+    auto& [score, lowest] =
+        score_of.try_emplace(label[k], 0.0, -std::numeric_limits<float>::infinity()).first->second;
+    score += std::exp(-below * below);
+    lowest = std::max(lowest, v);
+  }
+  std::size_t chosen = score_of.begin()->first;
+  for (const auto& [l, entry] : score_of)
+  {
+    const auto& best = score_of.at(chosen);
+    if (entry.first > best.first + 1e-9 ||
+        (std::abs(entry.first - best.first) <= 1e-9 && entry.second > best.second))
+    {
+      chosen = l;
+    }
+  }
+  std::vector<double> cx, cy;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    if (label[k] == chosen)
+    {
+      cx.push_back(xs[k]);
+      cy.push_back(ys[k]);
+    }
+  }
+
+  CentreEstimate estimate;
+  estimate.cluster_points = cx.size();
+  estimate.yaw = fitOrientation(cx, cy);
+  const double c = std::cos(estimate.yaw);
+  const double s = std::sin(estimate.yaw);
+  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+  double a_sum = 0.0, b_sum = 0.0;
+  for (std::size_t k = 0; k < cx.size(); ++k)
+  {
+    const double a = c * cx[k] + s * cy[k];
+    const double b = -s * cx[k] + c * cy[k];
+    a_lo = std::min(a_lo, a);
+    a_hi = std::max(a_hi, a);
+    b_lo = std::min(b_lo, b);
+    b_hi = std::max(b_hi, b);
+    a_sum += a;
+    b_sum += b;
+  }
+  const double a_cam = c * camera_x + s * camera_y;
+  const double b_cam = -s * camera_x + c * camera_y;
+  double a_centre = 0.5 * (a_lo + a_hi);
+  double b_centre = 0.5 * (b_lo + b_hi);
+  if (footprint)
+  {
+    const double extent_a = a_hi - a_lo;
+    const double extent_b = b_hi - b_lo;
+    // Viewing direction in the outline's axes: the face along axis a is seen with weight |view_b|.
+    double view_a = a_sum / static_cast<double>(cx.size()) - a_cam;
+    double view_b = b_sum / static_cast<double>(cx.size()) - b_cam;
+    const double norm = std::hypot(view_a, view_b);
+    if (norm > 0.0)
+    {
+      view_a /= norm;
+      view_b /= norm;
+    }
+    auto mismatch = [&](double along_a, double along_b)
+    {
+      return std::max(0.0, extent_a - along_a) + std::max(0.0, extent_b - along_b) +
+             std::abs(view_b) * std::abs(extent_a - along_a) +
+             std::abs(view_a) * std::abs(extent_b - along_b);
+    };
+    const bool length_along_a =
+        mismatch(footprint->length, footprint->width) <= mismatch(footprint->width, footprint->length);
+    const double dim_a = length_along_a ? footprint->length : footprint->width;
+    const double dim_b = length_along_a ? footprint->width : footprint->length;
+    a_centre = axisCentre(a_lo, a_hi, a_cam, dim_a);
+    b_centre = axisCentre(b_lo, b_hi, b_cam, dim_b);
+    estimate.source = CentreSource::kCompleted;
+  }
+  else
+  {
+    estimate.source = CentreSource::kExtent;
+  }
+  estimate.x = c * a_centre - s * b_centre;
+  estimate.y = s * a_centre + c * b_centre;
+  return estimate;
+}
+
+void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
+                     const ProjectedPointsView& points, double camera_x, double camera_y,
+                     const CentreConfig& config)
+{
+  for (FusedObject& object : result.objects)
+  {
+    if (object.detection_index >= detections.size())
+    {
+      throw std::invalid_argument("estimateCentres: detection index " +
+                                  std::to_string(object.detection_index) + " outside the " +
+                                  std::to_string(detections.size()) + " detections");
+    }
+    const Detection& detection = detections[object.detection_index];
+    const auto footprint = config.footprints.find(detection.label);
+    const CentreEstimate centre =
+        estimateCentre(points, object.members, detection.box, camera_x, camera_y,
+                       footprint == config.footprints.end() ? nullptr : &footprint->second, config);
+    object.x = centre.x;
+    object.y = centre.y;
+  }
+}
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,208 @@
+// Unit tests of the object centre estimate on constructed cell sets: a car seen from behind,
+// from the side and across a corner, a rotated car, an occluder in front, a class without a
+// footprint; and of the outline orientation fit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/fusion/object_centre.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kCell = 0.2;  // the grid's resolution [m]
+// The box of the object: bottom edge at v = 300 px, 100 px high.
+const BoundingBox kBox{100.F, 200.F, 300.F, 300.F};
+const Footprint kCar{3.9, 1.6};
+
+/// Cells every 0.2 m from (x0, y0) to (x1, y1) (both included), projected at row `v`.
+void addFace(ProjectedPoints& points, double x0, double y0, double x1, double y1, float v = 300.F)
+{
+  const double length = std::hypot(x1 - x0, y1 - y0);
+  const int steps = static_cast<int>(std::round(length / kCell));
+  for (int i = 0; i <= steps; ++i)
+  {
+    const double f = steps > 0 ? static_cast<double>(i) / steps : 0.0;
+    points.add(200.F, v, static_cast<float>(x0 + f * (x1 - x0)), static_cast<float>(y0 + f * (y1 - y0)), 0.F,
+               0.F, CellState::kStatic);
+  }
+}
+
+std::vector<std::uint32_t> all(const ProjectedPoints& points)
+{
+  std::vector<std::uint32_t> members(points.size());
+  std::iota(members.begin(), members.end(), 0U);
+  return members;
+}
+}  // namespace
+
+TEST(ObjectCentre, CarSeenFromBehindIsCompletedAwayFromTheCamera)
+{
+  // Rear face at x = 10 from y = -0.8 to 0.8; camera at the origin looking along +x. The car
+  // extends 3.9 m away from the camera: centre (10 + 1.95, 0).
+  ProjectedPoints points;
+  addFace(points, 10.0, -0.8, 10.0, 0.8);
+  const CentreEstimate c = estimateCentre(points.view(), all(points), kBox, 0.0, 0.0, &kCar, CentreConfig{});
+  EXPECT_NEAR(c.x, 11.95, 1e-6);
+  EXPECT_NEAR(c.y, 0.0, 1e-6);
+  EXPECT_EQ(c.cluster_points, 9U);
+  EXPECT_EQ(c.source, CentreSource::kCompleted);
+}
+
+TEST(ObjectCentre, CarSeenFromTheSideTakesItsWidthAcross)
+{
+  // Near side at y = 5 from x = 8 to 11.8 (the whole 3.9 m less one cell is seen); camera at
+  // (10, 0): the centre is midway along x (9.9) and half the width (0.8) beyond y = 5.
+  ProjectedPoints points;
+  addFace(points, 8.0, 5.0, 11.8, 5.0);
+  const CentreEstimate c = estimateCentre(points.view(), all(points), kBox, 10.0, 0.0, &kCar, CentreConfig{});
+  EXPECT_NEAR(c.x, 9.9, 1e-6);
+  EXPECT_NEAR(c.y, 5.8, 1e-6);
+}
+
+TEST(ObjectCentre, CornerViewCompletesBothAxes)
+{
+  // Rear face x = 10, y in [2, 3.6]; near side y = 2, x in [10, 13.8]: an L seen from the
+  // origin. Centre: the rear face is 1.6 m wide (fully seen) -> midway 2.8; the side is 3.8 m
+  // of 3.9 seen: the camera is before the rear face, so x = 10 + 3.9 / 2 = 11.95.
+  ProjectedPoints points;
+  addFace(points, 10.0, 2.0, 10.0, 3.6);
+  addFace(points, 10.2, 2.0, 13.8, 2.0);
+  const CentreEstimate c = estimateCentre(points.view(), all(points), kBox, 0.0, 0.0, &kCar, CentreConfig{});
+  EXPECT_NEAR(c.x, 11.95, 1e-6);
+  EXPECT_NEAR(c.y, 2.8, 1e-6);
+  EXPECT_NEAR(c.yaw, 0.0, 1e-9);
+}
+
+TEST(ObjectCentre, RotatedCarOrientationAndCentre)
+{
+  // A car at yaw 30° with its centre at (15, 4); the faces seen from the origin are the rear
+  // (at −1.95 m along the heading) and the right side (at −0.8 m across it).
+  const double yaw = M_PI / 6.0;
+  const double hx = std::cos(yaw), hy = std::sin(yaw);  // heading
+  const double lx = -hy, ly = hx;                       // left
+  auto corner = [&](double along, double across)
+  { return std::make_pair(15.0 + along * hx + across * lx, 4.0 + along * hy + across * ly); };
+  ProjectedPoints points;
+  const auto rear_right = corner(-1.95, -0.8);
+  const auto rear_left = corner(-1.95, 0.8);
+  const auto front_right = corner(1.95, -0.8);
+  addFace(points, rear_right.first, rear_right.second, rear_left.first, rear_left.second);
+  addFace(points, rear_right.first, rear_right.second, front_right.first, front_right.second);
+  const CentreEstimate c = estimateCentre(points.view(), all(points), kBox, 0.0, 0.0, &kCar, CentreConfig{});
+  EXPECT_NEAR(c.yaw, yaw, 1.5 * M_PI / 180.0);
+  EXPECT_NEAR(c.x, 15.0, 0.15);
+  EXPECT_NEAR(c.y, 4.0, 0.15);
+  // The paper's median of the same cells lies on the visible faces, well away from the centre.
+  FusionResult result = fuse({Detection{0, "car", 0.9F, BoundingBox{100.F, 200.F, 300.F, 300.F}}},
+                             points.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 1U);
+  EXPECT_GT(std::hypot(result.objects[0].median_x - 15.0, result.objects[0].median_y - 4.0), 0.7);
+  estimateCentres(result, {Detection{0, "car", 0.9F, kBox}}, points.view(), 0.0, 0.0, CentreConfig{});
+  EXPECT_NEAR(result.objects[0].x, c.x, 1e-9);
+  EXPECT_NEAR(result.objects[0].y, c.y, 1e-9);
+}
+
+TEST(ObjectCentre, CellsBelowTheBottomEdgeBelongToAnObjectInFront)
+{
+  // The object (a truck's rear at x = 30, 3 cells at the bottom edge row 300) behind a van
+  // whose 12 cells at x = 22 project 15 px below the bottom edge (15 % of the box height):
+  // the van is in front, the truck's cells are taken.
+  ProjectedPoints points;
+  addFace(points, 22.0, -1.0, 22.0, 1.2, 315.F);
+  addFace(points, 30.0, -0.2, 30.0, 0.2, 300.F);
+  const Footprint truck{10.1, 2.6};
+  const CentreEstimate c = estimateCentre(points.view(), all(points), kBox, 0.0, 0.0, &truck, CentreConfig{});
+  EXPECT_EQ(c.cluster_points, 3U);
+  EXPECT_NEAR(c.x, 30.0 + 10.1 / 2.0, 1e-6);
+  // Cells just below the edge (within 5 % of h) still count fully: the van wins at row 304.
+  ProjectedPoints near_edge;
+  addFace(near_edge, 22.0, -1.0, 22.0, 1.2, 304.F);
+  addFace(near_edge, 30.0, -0.2, 30.0, 0.2, 300.F);
+  EXPECT_EQ(
+      estimateCentre(near_edge.view(), all(near_edge), kBox, 0.0, 0.0, &truck, CentreConfig{}).cluster_points,
+      12U);
+}
+
+TEST(ObjectCentre, WithoutAFootprintTheCentreOfTheCells)
+{
+  ProjectedPoints points;
+  addFace(points, 10.0, -0.8, 10.0, 0.8);
+  const CentreEstimate c =
+      estimateCentre(points.view(), all(points), kBox, 0.0, 0.0, nullptr, CentreConfig{});
+  EXPECT_EQ(c.source, CentreSource::kExtent);
+  EXPECT_NEAR(c.x, 10.0, 1e-6);
+  EXPECT_NEAR(c.y, 0.0, 1e-6);
+  // estimateCentres() looks the footprint up by label: "tram" has one, "robot" has none.
+  FusionResult result = fuse({Detection{0, "robot", 0.9F, kBox}}, points.view(), FusionConfig{});
+  estimateCentres(result, {Detection{0, "robot", 0.9F, kBox}}, points.view(), 0.0, 0.0, CentreConfig{});
+  EXPECT_NEAR(result.objects.at(0).x, 10.0, 1e-6);
+}
+
+TEST(ObjectCentre, ObservedExtentLargerThanTheFootprintIsKept)
+{
+  // A 12 m bus labelled truck (footprint 10.1 m) seen from the side: the cells span 12 m, their
+  // middle is the centre along the bus.
+  ProjectedPoints points;
+  addFace(points, 4.0, 6.0, 16.0, 6.0);
+  const Footprint truck{10.1, 2.6};
+  const CentreEstimate c =
+      estimateCentre(points.view(), all(points), kBox, 10.0, 0.0, &truck, CentreConfig{});
+  EXPECT_NEAR(c.x, 10.0, 1e-6);
+  EXPECT_NEAR(c.y, 6.0 + 1.3, 1e-6);
+}
+
+TEST(ObjectCentre, OrientationOfARotatedOutline)
+{
+  for (const double deg : {0.0, 10.0, 37.0, 80.0})
+  {
+    const double t = deg * M_PI / 180.0;
+    std::vector<double> x, y;
+    for (int i = 0; i <= 20; ++i)  // an L: 4 m along t, 1.6 m across
+    {
+      x.push_back(0.2 * i * std::cos(t));
+      y.push_back(0.2 * i * std::sin(t));
+    }
+    for (int i = 1; i <= 8; ++i)
+    {
+      x.push_back(-0.2 * i * std::sin(t));
+      y.push_back(0.2 * i * std::cos(t));
+    }
+    EXPECT_NEAR(fitOrientation(x, y), t, 1.01 * M_PI / 180.0) << deg << " deg";
+  }
+  EXPECT_EQ(fitOrientation({1.0, 2.0}, {1.0, 2.0}), 0.0);
+}
+
+TEST(ObjectCentre, ConfigAndInputChecks)
+{
+  CentreConfig config;
+  EXPECT_NO_THROW(config.validate());
+  config.cluster_distance = 0.0;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = CentreConfig{};
+  config.footprints["car"] = Footprint{-1.0, 1.6};
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = CentreConfig{};
+  config.footprints[""] = Footprint{1.0, 1.0};
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  FusionConfig fusion;
+  fusion.centre.cluster_distance = std::nan("");
+  EXPECT_THROW(fusion.validate(), std::invalid_argument);
+
+  ProjectedPoints points;
+  addFace(points, 10.0, 0.0, 10.0, 0.0);
+  EXPECT_THROW(estimateCentre(points.view(), {}, kBox, 0.0, 0.0, &kCar, CentreConfig{}),
+               std::invalid_argument);
+  EXPECT_THROW(estimateCentre(points.view(), {5}, kBox, 0.0, 0.0, &kCar, CentreConfig{}),
+               std::invalid_argument);
+  EXPECT_EQ(positionSourceFromString("centre"), PositionSource::kCentre);
+  EXPECT_EQ(positionSourceFromString("median"), PositionSource::kMedian);
+  EXPECT_EQ(toString(PositionSource::kMedian), "median");
+  EXPECT_THROW(positionSourceFromString("center"), std::invalid_argument);
+}
+
+}  // namespace grid_vision_fusion
