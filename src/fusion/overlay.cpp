@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -73,6 +74,11 @@ std::string objectLabel(Motion motion, const std::string& label, double speed_mp
   return text;
 }
 
+std::string trackLabel(std::uint32_t id, Motion motion, const std::string& label, double speed_mps)
+{
+  return "#" + std::to_string(id) + " " + objectLabel(motion, label, speed_mps);
+}
+
 void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections, const FusionResult& result,
                        const ProjectedPointsView& points, const FusionConfig& config)
 {
@@ -96,8 +102,14 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     const cv::Scalar color = motionColor(object ? object->motion : Motion::kUnknown);
     const cv::Point2f top_left(detection.box.x_min, detection.box.y_min);
     cv::rectangle(image, top_left, cv::Point2f(detection.box.x_max, detection.box.y_max), color, 2);
-    const std::string text = object ? objectLabel(object->motion, detection.label, object->speed())
-                                    : detection.label + " (no grid points)";
+    const bool tentative =
+        std::find(result.tentative.begin(), result.tentative.end(), d) != result.tentative.end();
+    std::string text = detection.label + (tentative ? " (new track)" : " (no grid points)");
+    if (object)
+    {
+      text = result.tracked ? trackLabel(object->id, object->motion, detection.label, object->speed())
+                            : objectLabel(object->motion, detection.label, object->speed());
+    }
     int baseline = 0;
     const double scale = 0.5;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);

@@ -125,10 +125,11 @@ void FusionNodelet::onInit()
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
   NODELET_INFO(
-      "fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, "
-      "%s sync, %s",
+      "fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, position %s, "
+      "tracking %s, %s sync, %s",
       params.fusion.band_above, params.fusion.band_below, params.fusion.min_points,
-      toString(params.fusion.tie_rule).c_str(), approximate_sync ? "approximate" : "exact",
+      toString(params.fusion.tie_rule).c_str(), toString(params.fusion.position).c_str(),
+      params.tracking ? "on" : "off", approximate_sync ? "approximate" : "exact",
       params.lazy ? "lazy" : "always subscribed");
 }
 
@@ -225,7 +226,7 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
   const DetectedObjectArray::Ptr& objects = pair.objects;
   if (pub_markers_.getNumSubscribers() > 0)
   {
-    pub_markers_.publish(objectsToMarkers(*objects));
+    pub_markers_.publish(objectsToMarkers(*objects, result.tracked));
   }
   if (pub_image_.getNumSubscribers() > 0)
   {

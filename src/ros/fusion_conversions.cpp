@@ -94,12 +94,11 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
   msg->header.frame_id = grid_frame_id;
   msg->image_frame_id = image_header.frame_id;
   msg->objects.reserve(result.objects.size());
-  std::uint32_t id = 0;
   for (const auto& object : result.objects)
   {
     const Detection& detection = detections.at(object.detection_index);
     DetectedObject out;
-    out.id = id++;
+    out.id = object.id;
     out.class_id = detection.class_id;
     out.label = detection.label;
     out.score = detection.score;
@@ -120,7 +119,7 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
   return msg;
 }
 
-visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray& objects)
+visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray& objects, bool with_ids)
 {
   auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
   visualization_msgs::Marker clear;
@@ -162,7 +161,8 @@ visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray&
     label.scale.z = 0.8;
     label.color = color;
     label.color.a = 1.0F;
-    label.text = objectLabel(motion, object.label, speed);
+    label.text = with_ids ? trackLabel(object.id, motion, object.label, speed)
+                          : objectLabel(motion, object.label, speed);
     markers->markers.push_back(label);
   }
   return markers;

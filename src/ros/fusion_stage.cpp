@@ -6,7 +6,7 @@
 
 namespace grid_vision_fusion
 {
-FusionStage::FusionStage(const FusionParams& params) : params_(params)
+FusionStage::FusionStage(const FusionParams& params) : params_(params), tracker_(params.tracker)
 {
   params_.fusion.validate();
 }
@@ -17,7 +17,7 @@ void FusionStage::setConfig(const FusionConfig& config)
   params_.fusion = config;
 }
 
-FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedGrid& grid) const
+FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedGrid& grid)
 {
   const std::string grid_error = checkProjectedGrid(grid);
   if (!grid_error.empty())
@@ -32,7 +32,17 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   {
     throw std::invalid_argument(input_error);
   }
-  pair.result = grid_vision_fusion::fuse(pair.detections, viewOf(grid), params_.fusion);
+  const ProjectedPointsView points = viewOf(grid);
+  pair.result = grid_vision_fusion::fuse(pair.detections, points, params_.fusion);
+  if (params_.fusion.position == PositionSource::kCentre)
+  {
+    estimateCentres(pair.result, pair.detections, points, grid.camera_position.x, grid.camera_position.y,
+                    params_.fusion.centre);
+  }
+  if (params_.tracking)
+  {
+    trackObjects(tracker_, detections.header.stamp.toSec(), pair.detections, pair.result);
+  }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
   return pair;
 }

@@ -47,6 +47,10 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, TieRule& out)
 {
   return enumFromParam(value, out, tieRuleFromString);
 }
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, PositionSource& out)
+{
+  return enumFromParam(value, out, positionSourceFromString);
+}
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out)
 {
   return enumFromParam(value, out, resizeModeFromString);
@@ -63,6 +67,10 @@ XmlRpc::XmlRpcValue toParamValue(TieRule value)
 {
   return toParamValue(toString(value));
 }
+XmlRpc::XmlRpcValue toParamValue(PositionSource value)
+{
+  return toParamValue(toString(value));
+}
 XmlRpc::XmlRpcValue toParamValue(ResizeMode value)
 {
   return toParamValue(toString(value));
@@ -74,6 +82,45 @@ XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value)
 XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value)
 {
   return toParamValue(toString(value));
+}
+
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, Footprint>& out)
+{
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+  {
+    return false;
+  }
+  auto& v = const_cast<XmlRpc::XmlRpcValue&>(value);
+  std::map<std::string, Footprint> read;
+  for (auto it = v.begin(); it != v.end(); ++it)
+  {
+    XmlRpc::XmlRpcValue& pair = it->second;
+    double length = 0.0;
+    double width = 0.0;
+    if (pair.getType() != XmlRpc::XmlRpcValue::TypeArray || pair.size() != 2 ||
+        !paramValueAs(pair[0], length) || !paramValueAs(pair[1], width))
+    {
+      throw std::invalid_argument("entry " + it->first + " must be [length, width] in metres");
+    }
+    read[it->first] = Footprint{length, width};
+  }
+  out = std::move(read);
+  return true;
+}
+
+XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, Footprint>& value)
+{
+  XmlRpc::XmlRpcValue out;
+  out.begin();  // an (empty) struct
+  for (const auto& [label, footprint] : value)
+  {
+    XmlRpc::XmlRpcValue pair;
+    pair.setSize(2);
+    pair[0] = footprint.length;
+    pair[1] = footprint.width;
+    out[label] = pair;
+  }
+  return out;
 }
 
 DynamicGridParams DynamicGridParams::fromParams(const ParamSource& source, std::vector<std::string>* unknown)
@@ -131,6 +178,7 @@ FusionParams FusionParams::fromParams(const ParamSource& source, std::vector<std
   require(p.image_cache_size >= 1, source, "image_cache_size",
           "must be >= 1, got " + std::to_string(p.image_cache_size));
   p.fusion.validate();
+  p.tracker.validate();
   return p;
 }
 

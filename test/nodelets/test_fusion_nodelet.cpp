@@ -205,6 +205,50 @@ TEST_F(FusionNodeletTest, ObjectsCarryEveryField)
   EXPECT_FLOAT_EQ(van.y_max, 310.F);
 }
 
+TEST_F(FusionNodeletTest, TrackedObjectsKeepTheirIdsAndTheMarkersShowThem)
+{
+  // The instance under /tracked runs the defaults: the first image only starts (tentative)
+  // tracks, from the second on the car and the van are published with track ids that stay.
+  ros::Publisher detections = nh_.advertise<Detection2DArray>("/tracked/detections", 10);
+  ros::Publisher grids = nh_.advertise<ProjectedGrid>("/tracked/projected_grid", 10);
+  std::vector<DetectedObjectArray::ConstPtr> objects;
+  std::vector<visualization_msgs::MarkerArray::ConstPtr> markers;
+  ros::Subscriber sub_objects = nh_.subscribe<DetectedObjectArray>(
+      "/tracked/objects", 10, [&](const DetectedObjectArray::ConstPtr& m) { objects.push_back(m); });
+  ros::Subscriber sub_markers = nh_.subscribe<visualization_msgs::MarkerArray>(
+      "/tracked/objects/markers", 10,
+      [&](const visualization_msgs::MarkerArray::ConstPtr& m) { markers.push_back(m); });
+  ASSERT_TRUE(
+      waitFor([&] { return detections.getNumSubscribers() > 0 && grids.getNumSubscribers() > 0; }, 20.0))
+      << "the tracked fusion nodelet did not subscribe its inputs";
+  for (int k = 0; k < 4; ++k)
+  {
+    const ros::Time stamp = ros::Time(1317000100, 0) + ros::Duration(0.1 * k);
+    detections.publish(makeDetections(stamp));
+    grids.publish(makeGrid(stamp));
+    ASSERT_TRUE(waitFor([&] { return objects.size() > static_cast<std::size_t>(k); }, 10.0)) << "image " << k;
+  }
+  EXPECT_TRUE(objects[0]->objects.empty()) << "a track is confirmed at its second hit";
+  ASSERT_EQ(objects[1]->objects.size(), 2U);
+  const std::uint32_t car = objects[1]->objects[0].id;
+  const std::uint32_t van = objects[1]->objects[1].id;
+  EXPECT_GE(car, 1U);
+  EXPECT_NE(car, van);
+  for (std::size_t k = 2; k < objects.size(); ++k)
+  {
+    ASSERT_EQ(objects[k]->objects.size(), 2U);
+    EXPECT_EQ(objects[k]->objects[0].id, car);
+    EXPECT_EQ(objects[k]->objects[1].id, van);
+  }
+  ASSERT_TRUE(waitFor([&] { return markers.size() >= 4; }, 10.0)) << "no markers";
+  bool labelled = false;
+  for (const auto& marker : markers.back()->markers)
+  {
+    labelled = labelled || marker.text.rfind("#" + std::to_string(car) + " ", 0) == 0;
+  }
+  EXPECT_TRUE(labelled) << "no marker label starts with the car's track id";
+}
+
 TEST_F(FusionNodeletTest, EmptyInputStillPublishes)
 {
   subscribeObjects();

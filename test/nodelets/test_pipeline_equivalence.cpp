@@ -1,6 +1,6 @@
 // rostest: the offline Pipeline (run_pipeline) and the nodelet chain give the same objects on
-// the same short synthetic drive: same object arrays for the frames both produced, same motion
-// labels, positions within 0.1 m; two Pipeline runs give identical bytes.
+// the same short synthetic drive: same object arrays for the frames both produced, same track
+// ids and motion labels, positions within 0.1 m; two Pipeline runs give identical bytes.
 #include <gtest/gtest.h>
 
 #include <nodelet/loader.h>
@@ -323,6 +323,7 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
       const DetectedObject& p = a.objects[i];
       const DetectedObject& q = b.objects[i];
       EXPECT_EQ(p.label, q.label) << "t=" << stamp << " object " << i;
+      EXPECT_EQ(p.id, q.id) << "t=" << stamp << " object " << i << " (" << p.label << ")";
       EXPECT_EQ(p.motion, q.motion) << "t=" << stamp << " object " << i << " (" << p.label << ")";
       EXPECT_NEAR(p.position.x, q.position.x, 0.1) << "t=" << stamp << " object " << i;
       EXPECT_NEAR(p.position.y, q.position.y, 0.1) << "t=" << stamp << " object " << i;

@@ -98,7 +98,7 @@ TEST(FusionConversions, ObjectsCarryEveryField)
   EXPECT_FLOAT_EQ(o.x_min, 10.F);
   EXPECT_FLOAT_EQ(o.y_max, 40.F);
 
-  const visualization_msgs::MarkerArray::Ptr markers = objectsToMarkers(*msg);
+  const visualization_msgs::MarkerArray::Ptr markers = objectsToMarkers(*msg, false);
   // DELETEALL, cylinder, arrow, text.
   ASSERT_EQ(markers->markers.size(), 4U);
   EXPECT_EQ(markers->markers[0].action, visualization_msgs::Marker::DELETEALL);
@@ -119,7 +119,7 @@ TEST(FusionConversions, StaticObjectHasNoArrow)
   o.label = "van";
   o.motion = DetectedObject::MOTION_STATIC;
   objects.objects.push_back(o);
-  const auto markers = objectsToMarkers(objects);
+  const auto markers = objectsToMarkers(objects, false);
   ASSERT_EQ(markers->markers.size(), 3U);
   EXPECT_EQ(markers->markers[2].text, "static van");
 }

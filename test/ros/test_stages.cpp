@@ -170,7 +170,10 @@ TEST(DetectorStage, ReplaysLabelsInStepWithTheImagesAndOneThresholdServesBothBac
 
 TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
 {
-  FusionStage stage(FusionParams{});
+  FusionParams per_frame;  // the paper's output: no tracker, the median position
+  per_frame.tracking = false;
+  per_frame.fusion.position = PositionSource::kMedian;
+  FusionStage stage(per_frame);
   Detection2DArray detections;
   detections.header.stamp = kStamp;
   detections.header.frame_id = "camera";
@@ -213,6 +216,31 @@ TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
   EXPECT_THROW(stage.setConfig(bad), std::invalid_argument);
   EXPECT_EQ(stage.config().min_points, FusionConfig{}.min_points)
       << "a refused configuration changes nothing";
+
+  // With the defaults the stage tracks: the first pair starts a tentative track (nothing
+  // published), the next ones publish it with the same track id; the centre lies beyond the
+  // cells seen from the camera at the origin.
+  FusionStage tracked(FusionParams{});
+  grid.image_width = 640;
+  std::uint32_t id = 0;
+  for (int k = 0; k < 4; ++k)
+  {
+    detections.header.stamp = kStamp + ros::Duration(0.1 * k);
+    grid.header.stamp = detections.header.stamp;
+    const FusedPair p = tracked.fuse(detections, grid);
+    if (k == 0)
+    {
+      EXPECT_TRUE(p.objects->objects.empty());
+      EXPECT_EQ(p.result.tentative, std::vector<std::size_t>{0});
+      continue;
+    }
+    ASSERT_EQ(p.objects->objects.size(), 1U) << "pair " << k;
+    id = k == 1 ? p.objects->objects[0].id : id;
+    EXPECT_EQ(p.objects->objects[0].id, id);
+    EXPECT_GT(p.objects->objects[0].position.x, 12.4);
+  }
+  EXPECT_GE(id, 1U);
+  EXPECT_EQ(tracked.tracker().size(), 1U);
 }
 
 }  // namespace

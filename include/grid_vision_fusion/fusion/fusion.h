@@ -119,6 +119,10 @@ struct FusionResult
   /// Points skipped because a coordinate, a velocity or the state was invalid (NaN/Inf,
   /// unknown state value).
   std::size_t invalid_points = 0;
+  /// The objects went through the tracker: ids are track ids, motion and state the track's.
+  bool tracked = false;
+  /// Tracked only: detection indices of the objects held back while their track is tentative.
+  std::vector<std::size_t> tentative;
 };
 
 /// Median of `values` (average of the two middle values for an even count).

@@ -21,12 +21,16 @@ void drawProjectedPoints(cv::Mat& image, const ProjectedPointsView& points, int 
 
 /// Draws the fusion result over `image` (CV_8UC3, BGR): the projected points, the fusion band
 /// of every box (thin rectangle), every box (thick, coloured by the motion of its object; grey
-/// when its region was empty) and a label "dynamic car 4.2 m/s" / "static van".
+/// when its region was empty or its track is tentative) and a label "dynamic car 4.2 m/s" /
+/// "static van"; for a tracked result with the track id, "#12 dynamic car 4.2 m/s", and
+/// "car (new track)" for a tentative one.
 void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections, const FusionResult& result,
                        const ProjectedPointsView& points, const FusionConfig& config);
 
 /// The label text of an object: "<motion> <label>", plus " <speed> m/s" (one decimal) when
 /// dynamic, e.g. "dynamic car 4.2 m/s", "static van".
 std::string objectLabel(Motion motion, const std::string& label, double speed_mps);
+/// objectLabel() after the track id: "#12 dynamic car 4.2 m/s".
+std::string trackLabel(std::uint32_t id, Motion motion, const std::string& label, double speed_mps);
 
 }  // namespace grid_vision_fusion

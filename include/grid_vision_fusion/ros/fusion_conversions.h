@@ -26,13 +26,14 @@ ProjectedPointsView viewOf(const ProjectedGrid& msg);
 
 /// The DetectedObjectArray of a fusion result: header.stamp = the image stamp,
 /// header.frame_id = `grid_frame_id`, image_frame_id = the camera frame of `image_header`;
-/// ids are 0, 1, 2... in detection order.
+/// id = FusedObject::id (the index from fuse(), the track id once tracked).
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,
                                       const std::vector<Detection>& detections, const FusionResult& result);
 
 /// rviz markers for `objects`: a DELETEALL first, then per object a cylinder at its position
 /// (static blue, dynamic green, unknown grey), an arrow along the velocity of dynamic objects
-/// (length = 1 s of travel) and a text label such as "dynamic car 4.2 m/s".
-visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray& objects);
+/// (length = 1 s of travel) and a text label such as "dynamic car 4.2 m/s", with `with_ids`
+/// (ids are track ids) "#12 dynamic car 4.2 m/s".
+visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray& objects, bool with_ids);
 
 }  // namespace grid_vision_fusion

@@ -8,6 +8,7 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/fusion/tracker.h"
 #include "grid_vision_fusion/ros/node_params.h"
 
 namespace grid_vision_fusion
@@ -16,20 +17,24 @@ namespace grid_vision_fusion
 struct FusedPair
 {
   std::vector<Detection> detections;  ///< the boxes of the Detection2DArray
-  FusionResult result;                ///< the fusion core's result
+  FusionResult result;                ///< the objects as published (tracked when tracking is on)
   DetectedObjectArray::Ptr objects;   ///< the message (stamp of the image, grid frame)
 };
 
-/// The fusion with its parameters. Not thread-safe.
+/// The fusion with its parameters, and the tracker that carries the objects from pair to pair.
+/// Not thread-safe.
 class FusionStage
 {
 public:
   /// @throws std::invalid_argument when `params` is invalid.
   explicit FusionStage(const FusionParams& params);
 
-  /// Checks and fuses a pair: checkProjectedGrid(), checkFusionInputs(), fuse(), objectsToMsg().
-  /// @throws std::invalid_argument naming what is wrong with the pair.
-  FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid) const;
+  /// Checks and fuses a pair: checkProjectedGrid(), checkFusionInputs(), fuse(), the position
+  /// (estimateCentres() unless params.fusion.position is kMedian), with tracking the tracker
+  /// (only objects of confirmed tracks stay, with the track's id, motion, position and
+  /// velocity), then objectsToMsg(). Pairs must come in stamp order.
+  /// @throws std::invalid_argument naming what is wrong with the pair (the tracker is untouched).
+  FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid);
 
   /// Replaces the fusion configuration (dynamic_reconfigure). @throws std::invalid_argument
   /// as FusionConfig::validate(), leaving the configuration unchanged.
@@ -37,9 +42,12 @@ public:
 
   const FusionConfig& config() const { return params_.fusion; }
   const FusionParams& params() const { return params_; }
+  /// The tracker (its tracks live as long as the stage).
+  const Tracker& tracker() const { return tracker_; }
 
 private:
   FusionParams params_;
+  Tracker tracker_;
 };
 
 }  // namespace grid_vision_fusion

@@ -13,6 +13,7 @@
 #include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/fusion/tracker.h"
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"
 #include "grid_vision_fusion/projection/grid_projection.h"
 #include "grid_vision_fusion/ros/params.h"
@@ -21,13 +22,19 @@ namespace grid_vision_fusion
 {
 // --- enumerations: read from and written as their names ----------------------------------------
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, TieRule& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, PositionSource& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, YoloOutputLayout& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, FrameIndexSource& out);
 XmlRpc::XmlRpcValue toParamValue(TieRule value);
+XmlRpc::XmlRpcValue toParamValue(PositionSource value);
 XmlRpc::XmlRpcValue toParamValue(ResizeMode value);
 XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value);
 XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value);
+
+// --- class footprints: a map from label to [length, width] [m] ----------------------------------
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, Footprint>& out);
+XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, Footprint>& value);
 
 // --- dynamic_grid ------------------------------------------------------------------------------
 
@@ -192,6 +199,10 @@ struct FusionParams
   int queue_size = 10;            ///< synchroniser queue per input (>= 1)
   int image_cache_size = 10;      ///< images kept for the overlay (>= 1)
   FusionConfig fusion;
+  /// Track the objects from image to image (ids, filtered state, motion over time); false: the
+  /// paper's per-frame output (ids = index in the array).
+  bool tracking = true;
+  TrackerConfig tracker;
 
   /// @throws std::invalid_argument naming the parameter at fault.
   static FusionParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
@@ -210,6 +221,27 @@ void visitParams(FusionParams& p, Visitor& v)
   v("min_points", p.fusion.min_points);
   v("tie_rule", p.fusion.tie_rule);
   v("exclusive_assignment", p.fusion.exclusive_assignment);
+  v("position", p.fusion.position);
+  v("centre_cluster_distance", p.fusion.centre.cluster_distance);
+  v("class_footprints", p.fusion.centre.footprints);
+  v("tracking", p.tracking);
+  auto& t = p.tracker;
+  v("track_min_hits", t.min_hits);
+  v("track_max_misses", t.max_misses);
+  v("track_gate_sigma", t.gate_sigma);
+  v("track_min_iou", t.min_iou);
+  v("track_iou_weight", t.iou_weight);
+  v("track_acceleration_sigma", t.acceleration_sigma);
+  v("track_position_sigma", t.position_sigma);
+  v("track_velocity_sigma", t.velocity_sigma);
+  v("track_initial_speed_sigma", t.initial_speed_sigma);
+  v("track_max_gap", t.max_gap);
+  v("motion_evidence_limit", t.motion_evidence_limit);
+  v("motion_switch_evidence", t.motion_switch_evidence);
+  v("motion_min_dwell", t.motion_min_dwell);
+  v("motion_speed_evidence", t.speed_evidence);
+  v("motion_speed_threshold", t.motion_speed_threshold);
+  v("motion_speed_window", t.motion_speed_window);
 }
 
 /// The values of the table `params` by parameter name (the defaults for a default-constructed one).

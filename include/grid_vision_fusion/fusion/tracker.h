@@ -1,0 +1,178 @@
+// Multi-object tracking of the fused objects: objects that persist from image to image with a
+// stable id, a constant-velocity Kalman filter per track in the fixed (grid) frame, and a motion
+// verdict that accumulates the evidence of several frames with hysteresis.
+//
+// Per image (Tracker::update): every track is predicted to the image stamp; tracks and fused
+// objects are associated by an optimal assignment (solveAssignment()) of the pairs that pass the
+// gate (same label, and the object within gate_sigma of the track's predicted position, or its
+// box overlapping the track's last box by min_iou or more); the cost of a pair is its squared
+// Mahalanobis distance over gate_sigma² plus iou_weight · (1 − IoU). A matched track is updated
+// with the object's position (and the grid's velocity when the object's region is dynamic), or,
+// when the object passed the gate by its box alone, restarted at the object's position; an
+// object left over starts a tentative track, which becomes confirmed after min_hits hits and is
+// dropped at its first miss; a confirmed track is dropped after more than max_misses consecutive
+// misses. Only confirmed tracks that were matched in this image are reported.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/types.h"
+
+namespace grid_vision_fusion
+{
+/// Parameters of the tracker.
+struct TrackerConfig
+{
+  int min_hits = 2;    ///< hits (images with a matched object) that confirm a track, >= 1
+  int max_misses = 5;  ///< a confirmed track is dropped after more consecutive misses, >= 0
+  /// Gate on the predicted position: squared Mahalanobis distance <= gate_sigma² [σ], > 0.
+  double gate_sigma = 3.0;
+  /// Boxes overlapping the track's last box by this IoU or more pass the gate whatever their
+  /// position, (0, 1]; a second cue where the position estimate jumps (an object partly hidden).
+  double min_iou = 0.3;
+  double iou_weight = 1.0;           ///< weight of (1 − IoU) in the association cost, >= 0
+  double acceleration_sigma = 2.0;   ///< process noise: white acceleration [m/s²], > 0
+  double position_sigma = 0.5;       ///< noise of a position measurement [m], > 0
+  double velocity_sigma = 1.0;       ///< noise of the grid's velocity of a dynamic region [m/s], > 0
+  double initial_speed_sigma = 5.0;  ///< velocity uncertainty of a new track without one [m/s], > 0
+  double max_gap = 1.0;  ///< more time between two images [s], or time going back, resets the tracks
+  /// Motion evidence: every image adds the region's evidence (d − s)/(d + s) of its static and
+  /// dynamic cell counts, plus speed_evidence (below), to the track's score, which is clamped to
+  /// ±motion_evidence_limit. The verdict turns dynamic when the score reaches
+  /// +motion_switch_evidence and static when it reaches −motion_switch_evidence; in between it
+  /// keeps the last verdict (hysteresis). Until its score first reaches a threshold, a new track
+  /// takes the verdict of each image's region (the per-frame output's).
+  double motion_evidence_limit = 3.0;   ///< > 0
+  double motion_switch_evidence = 1.5;  ///< in (0, motion_evidence_limit]
+  /// After a change (of either kind), the verdict holds for at least this long [s], >= 0: no
+  /// flicker faster.
+  double motion_min_dwell = 2.0;
+  /// Weight of the track's own motion as evidence, >= 0 (0: the grid's evidence only): +weight
+  /// when both the filter's speed and the average speed of the last motion_speed_window (the
+  /// filtered position's displacement over that time) exceed motion_speed_threshold, −weight
+  /// when both are below half of it. Needs a track older than half the window.
+  double speed_evidence = 1.0;
+  double motion_speed_threshold = 1.0;  ///< [m/s], > 0
+  double motion_speed_window = 1.0;     ///< [s], > 0
+
+  /// @throws std::invalid_argument naming the first bad field (as the ranges above).
+  void validate() const;
+};
+
+/// One fused object of an image, as the tracker sees it.
+struct TrackObservation
+{
+  std::string label;  ///< the detector's class; only tracks of the same label are associated
+  BoundingBox box;    ///< the detector box [px]
+  double x = 0.0;     ///< position [m], fixed frame
+  double y = 0.0;
+  bool has_velocity = false;  ///< the region is dynamic: vx, vy are the grid's velocity
+  double vx = 0.0;            ///< [m/s], fixed frame
+  double vy = 0.0;
+  std::uint32_t static_points = 0;   ///< static cells of the region
+  std::uint32_t dynamic_points = 0;  ///< dynamic cells of the region
+  Motion motion = Motion::kUnknown;  ///< the region's own verdict (the paper's)
+};
+
+/// What the tracker says about one observation of the image.
+struct TrackEstimate
+{
+  bool confirmed = false;            ///< the observation belongs to a confirmed track: report it
+  std::uint32_t id = 0;              ///< track id, unique over the tracker's life, from 1
+  Motion motion = Motion::kUnknown;  ///< the track's verdict
+  double x = 0.0;                    ///< filtered position [m]
+  double y = 0.0;
+  double vx = 0.0;  ///< filtered velocity [m/s]
+  double vy = 0.0;
+  double speed_sigma = 0.0;  ///< standard deviation of the speed estimate [m/s]
+  /// Average speed over the last motion_speed_window (displacement of the filtered position),
+  /// 0 for a track younger than half of it [m/s].
+  double window_speed = 0.0;
+  double motion_score = 0.0;  ///< accumulated motion evidence (> 0 dynamic)
+  int hits = 0;               ///< images with an observation, this one included
+  double age = 0.0;           ///< time since the track's first observation [s]
+};
+
+/// The tracker. Deterministic; not thread-safe.
+class Tracker
+{
+public:
+  /// @throws std::invalid_argument when `config` is invalid.
+  explicit Tracker(const TrackerConfig& config = TrackerConfig());
+
+  /// Processes the observations of the image at `stamp_s` [s]: one estimate per observation,
+  /// in the same order. Stamps must increase; a stamp earlier than the last one, or later by
+  /// more than max_gap, first drops every track (ids keep counting up).
+  std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations);
+
+  /// Replaces the configuration; the tracks are kept. @throws std::invalid_argument as the
+  /// constructor, leaving the configuration unchanged.
+  void setConfig(const TrackerConfig& config);
+  const TrackerConfig& config() const { return config_; }
+
+  /// Drops every track (ids keep counting up).
+  void reset();
+  /// Tracks alive (tentative and confirmed).
+  std::size_t size() const { return tracks_.size(); }
+
+private:
+  struct Track
+  {
+    std::uint32_t id = 0;
+    std::string label;
+    Eigen::Vector4d state = Eigen::Vector4d::Zero();  ///< x, y, vx, vy
+    Eigen::Matrix4d covariance = Eigen::Matrix4d::Identity();
+    BoundingBox box;
+    int hits = 0;
+    int misses = 0;
+    bool confirmed = false;
+    double first_stamp = 0.0;
+    double motion_score = 0.0;
+    Motion motion = Motion::kUnknown;
+    bool decided = false;  ///< the motion score has reached a threshold once
+    bool has_motion_change = false;
+    double last_motion_change = 0.0;  ///< stamp of the last verdict change [s]
+    /// Filtered positions of the last motion_speed_window: (stamp [s], x, y), oldest first.
+    std::deque<Eigen::Vector3d> history;
+  };
+
+  void predict(Track& track, double dt) const;
+  void correct(Track& track, const TrackObservation& observation) const;
+  /// Squared Mahalanobis distance of the observation's position from the track's prediction.
+  double positionDistance2(const Track& track, const TrackObservation& observation) const;
+  /// Sets the state to the observation (position, the grid's velocity or zero) with the initial
+  /// uncertainty: a new track, or a track whose object was admitted by its box overlap alone.
+  void restart(Track& track, const TrackObservation& observation) const;
+  void updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const;
+  double speedSigma(const Track& track) const;
+  /// Average speed over the track's history (0 while it spans less than half the window).
+  double windowSpeed(const Track& track) const;
+  TrackEstimate estimateOf(const Track& track, double stamp_s) const;
+
+  TrackerConfig config_;
+  std::vector<Track> tracks_;
+  std::uint32_t next_id_ = 1;
+  bool has_stamp_ = false;
+  double last_stamp_ = 0.0;
+};
+
+/// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
+/// observation (label and box of its detection, its position, the grid's velocity when its
+/// region is dynamic, its cell counts and per-frame motion); objects of confirmed tracks take
+/// the track's id, motion, filtered position and, when dynamic, velocity and heading (static
+/// and unknown ones zero, as the message says); the others are removed and their detection
+/// indices listed in result.tentative. Sets result.tracked.
+void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
+                  FusionResult& result);
+
+/// Intersection over union of two boxes (continuous pixel coordinates), 0 when disjoint or empty.
+double boxOverlap(const BoundingBox& a, const BoundingBox& b);
+
+}  // namespace grid_vision_fusion
