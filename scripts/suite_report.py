@@ -4,11 +4,13 @@ suite_report.md and suite_report.json, and checks them against thresholds.
 
 Input per scenario: the evaluation folder that `evaluate` wrote (its matches.csv: one line per
 ground-truth object matched by class and IoU within the range, with the truth motion, the truth
-speed band, the predicted motion and the state errors). Output, per scenario and over all of
-them, per class: the motion confusion with the moving objects split by truth speed band
-(0.5-1, 1-3, > 3 m/s), the position, speed and heading errors (median, 90th percentile), and the
-headline figures of issue 11 (moving objects >= 1 m/s found dynamic, overall and per class;
-static objects found static).
+speed band, the predicted motion and the state errors; its metrics.json for the tracking
+figures, when it has them). Output, per scenario and over all of them, per class: the motion
+confusion with the moving objects split by truth speed band (0.5-1, 1-3, > 3 m/s), the position,
+speed and heading errors (median, 90th percentile), the headline figures of issue 11 (moving
+objects >= 1 m/s found dynamic, overall and per class; static objects found static) and of
+issue 12 (errors over all classes, motion right, id switches per 100 matched object-frames,
+MOTA, IDF1, motion flickers).
 
 usage: suite_report.py --output DIR --scenario NAME EVAL_DIR SECONDS [--scenario ...]
                        [--wall-time S] [--cpu TEXT] [--thresholds FILE] [--junit FILE]
@@ -108,6 +110,61 @@ class Tally:
                 "heading_error_deg": error_stats(self.heading)}
 
 
+TRACKING_COUNTS = ("ground_truth", "matches", "false_positives", "misses", "id_switches", "fragmentations",
+                   "truth_tracks", "mostly_tracked", "mostly_lost", "idtp", "idfp", "idfn", "motion_changes",
+                   "motion_flickers", "flickering_tracks")
+
+
+def read_tracking(folder):
+    """The "tracking" object of the folder's metrics.json, or None (no file, or no tracking figures)."""
+    path = os.path.join(folder, "metrics.json")
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as f:
+            metrics = json.load(f)
+    except (OSError, ValueError) as error:
+        raise InputError("cannot read %s: %s" % (path, error))
+    tracking = metrics.get("tracking") if isinstance(metrics, dict) else None
+    if tracking is None:
+        return None
+    if not isinstance(tracking, dict) or any(not isinstance(tracking.get(k), int) for k in TRACKING_COUNTS):
+        raise InputError("%s: \"tracking\" lacks one of the counts %s" % (path, ", ".join(TRACKING_COUNTS)))
+    return {k: tracking[k] for k in TRACKING_COUNTS}
+
+
+def tracking_summary(parts):
+    """Summed counts of several evaluations' tracking figures with MOTA, IDF1 and the rates."""
+    parts = [p for p in parts if p is not None]
+    if not parts:
+        return None
+    t = {k: sum(p[k] for p in parts) for k in TRACKING_COUNTS}
+    t["mota"] = (1.0 - (t["misses"] + t["false_positives"] + t["id_switches"]) / t["ground_truth"]
+                 if t["ground_truth"] else None)
+    t["idf1"] = (2.0 * t["idtp"] / (2 * t["idtp"] + t["idfp"] + t["idfn"]) if t["idtp"] else 0.0)
+    t["id_switches_per_100"] = 100.0 * t["id_switches"] / t["matches"] if t["matches"] else None
+    return t
+
+
+def motion_right(tallies):
+    """Matches whose truth is static or dynamic (any speed band) and whose predicted motion is it."""
+    bands = ("static", "0.5-1", "1-3", ">3")
+    return fraction(sum(t.right(bands) for t in tallies.values()), sum(t.total(bands) for t in tallies.values()))
+
+
+def tracking_table(named):
+    lines = ["| run | matched | motion right [%] | ID switches | per 100 matched | fragmentations | MOTA [%] | "
+             "IDF1 [%] | motion changes | flickers | flickering tracks |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name, t, right in named:
+        if t is None:
+            continue
+        lines.append("| %s | %d | %s | %d | %.2f | %d | %.1f | %.1f | %d | %d | %d |" % (
+            name, t["matches"], percent(right), t["id_switches"], t["id_switches_per_100"] or 0.0,
+            t["fragmentations"], 100.0 * (t["mota"] or 0.0), 100.0 * t["idf1"], t["motion_changes"],
+            t["motion_flickers"], t["flickering_tracks"]))
+    return lines
+
+
 def fraction(found, total):
     return {"found": found, "total": total, "fraction": (found / total) if total else None}
 
@@ -164,11 +221,26 @@ def motion_table(tallies):
     return lines
 
 
+def all_classes(tallies):
+    """One tally of every class's matches."""
+    total = Tally()
+    for t in tallies.values():
+        for band in BANDS:
+            for m in MOTIONS:
+                total.counts[band][m] += t.counts[band][m]
+        total.position += t.position
+        total.speed += t.speed
+        total.heading += t.heading
+    return total
+
+
 def error_table(tallies):
     lines = ["| class | matches | position [m] median / p90 | speed [m/s] median / p90 | "
              "heading [deg] median / p90 (both dynamic) |", "|---|---|---|---|---|"]
-    for label in sorted(tallies):
-        t = tallies[label]
+    rows = [(label, tallies[label]) for label in sorted(tallies)]
+    if len(rows) > 1:
+        rows.append(("all classes", all_classes(tallies)))
+    for label, t in rows:
         lines.append("| %s | %d | %s | %s | %s |" % (label, t.total(), stat(error_stats(t.position), 2),
                                                       stat(error_stats(t.speed), 2),
                                                       stat(error_stats(t.heading), 1)))
@@ -303,14 +375,16 @@ def main(argv):
             except ValueError:
                 raise InputError("scenario %s: SECONDS must be a number, got %r" % (name, seconds))
             rows = read_matches(os.path.join(folder, "matches.csv"))
-            scenarios.append((name, seconds, rows))
+            scenarios.append((name, seconds, rows, read_tracking(folder)))
     except InputError as error:
         print("suite_report: %s" % error, file=sys.stderr)
         return 1
 
-    overall_rows = [row for _, _, rows in scenarios for row in rows]
+    overall_rows = [row for _, _, rows, _ in scenarios for row in rows]
     overall = summarise(overall_rows)
     overall_headline = headline(overall)
+    overall_tracking = tracking_summary([t for _, _, _, t in scenarios])
+    overall_all = all_classes(overall)
     checks = check(overall_headline, thresholds)
 
     report = {"matching": "ground truth matched by class and IoU >= 0.5, objects up to 30 m ahead "
@@ -318,6 +392,8 @@ def main(argv):
               "cpu": args.cpu, "wall_time_s": args.wall_time, "jobs": args.jobs,
               "headline": overall_headline,
               "overall": {label: t.to_json() for label, t in sorted(overall.items())},
+              "all_classes": overall_all.to_json(), "motion_right": motion_right(overall),
+              "tracking": overall_tracking,
               "scenarios": [], "thresholds": thresholds,
               "checks": [{"name": n, "passed": ok, "message": m} for n, ok, m in checks]}
     md = ["# Scenario suite report", "",
@@ -332,15 +408,26 @@ def main(argv):
             m for _, ok, m in checks if not ok)) + "."]
     md += ["", "## All scenarios: motion per class and truth speed band", ""] + motion_table(overall)
     md += ["", "## All scenarios: state errors per class", ""] + error_table(overall)
+    if overall_tracking is not None:
+        md += ["", "## Tracking (issue 12)", "",
+               "Motion right: matches with a static or dynamic truth whose reported motion is the truth's. "
+               "ID switches, fragmentations, MOTA, IDF1: CLEAR MOT and identity measures against the tracklets "
+               "(evaluate's metrics.json). Flickers: a reported motion change less than 2 s after the previous "
+               "one of the same object while its truth motion is constant.", ""]
+        md += tracking_table([("all scenarios", overall_tracking, motion_right(overall))] +
+                             [(name, tracking_summary([t]), motion_right(summarise(rows)))
+                              for name, _, rows, t in scenarios])
     md += ["", "## Per scenario", "",
            "| scenario | matches | moving >= 1 m/s found dynamic [%] | static found static [%] | "
            "moving 0.5-1 m/s found dynamic [%] | wall time [s] |", "|---|---|---|---|---|---|"]
     details = []
-    for name, seconds, rows in scenarios:
+    for name, seconds, rows, tracking in scenarios:
         tallies = summarise(rows)
         h = headline(tallies)
         report["scenarios"].append({"name": name, "wall_time_s": seconds, "matches": len(rows), "headline": h,
-                                    "classes": {label: t.to_json() for label, t in sorted(tallies.items())}})
+                                    "classes": {label: t.to_json() for label, t in sorted(tallies.items())},
+                                    "motion_right": motion_right(tallies),
+                                    "tracking": tracking_summary([tracking])})
         md.append("| %s | %d | %s (%d/%d) | %s (%d/%d) | %s (%d/%d) | %.0f |" % (
             name, len(rows), percent(h["moving_ge1_dynamic"]), h["moving_ge1_dynamic"]["found"],
             h["moving_ge1_dynamic"]["total"], percent(h["static_static"]), h["static_static"]["found"],

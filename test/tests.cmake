@@ -32,7 +32,7 @@ gvf_gtest(test_kitti
   LINK grid_vision_fusion_kitti)
 gvf_gtest(test_evaluation
   SOURCES test/evaluation/test_evaluation.cpp test/evaluation/test_evaluation_report.cpp
-    test/evaluation/test_kitti_ground_truth.cpp
+    test/evaluation/test_kitti_ground_truth.cpp test/evaluation/test_tracking_evaluation.cpp
   LINK grid_vision_fusion_evaluation)
 gvf_gtest(test_simulation
   SOURCES test/simulation/test_synthetic_world.cpp test/simulation/test_synthetic_camera.cpp

@@ -296,7 +296,14 @@ int run(const Options& o)
   }
 
   const std::vector<gvf::EvalObject> ground_truth = gvf::evalObjects(truth);
-  const gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
+  gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
+  if (o.labels.empty())  // tracklets give the ground-truth identities
+  {
+    gvf::TrackingEvaluationConfig tracking;
+    tracking.iou_threshold = o.evaluation.iou_threshold;
+    tracking.max_longitudinal_m = o.evaluation.max_longitudinal_m;
+    result.tracking = gvf::evaluateTracking(ground_truth, bag.detections, tracking);
+  }
   gvf::writeEvaluationOutputs(o.output, result, o.evaluation, ground_truth, bag.detections);
   std::cout << gvf::reportMarkdown(result, o.evaluation);
   std::cerr << "Wrote " << o.output

@@ -217,7 +217,22 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
   }
   out << (class_index ? "\n  " : "") << "},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
       << ",\n  \"speed_error_mps\": " << jsonStats(result.speed_error_mps)
-      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad) << "\n}\n";
+      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad);
+  if (result.tracking)
+  {
+    const TrackingMetrics& t = *result.tracking;
+    out << ",\n  \"tracking\": {\"ground_truth\": " << t.ground_truth << ", \"matches\": " << t.matches
+        << ", \"false_positives\": " << t.false_positives << ", \"misses\": " << t.misses
+        << ", \"id_switches\": " << t.id_switches << ", \"fragmentations\": " << t.fragmentations
+        << ", \"mota\": " << number(t.mota) << ", \"id_switches_per_100\": " << number(t.id_switches_per_100)
+        << ",\n    \"truth_tracks\": " << t.truth_tracks << ", \"mostly_tracked\": " << t.mostly_tracked
+        << ", \"mostly_lost\": " << t.mostly_lost << ", \"idtp\": " << t.idtp << ", \"idfp\": " << t.idfp
+        << ", \"idfn\": " << t.idfn << ", \"idf1\": " << number(t.idf1) << ", \"idp\": " << number(t.idp)
+        << ", \"idr\": " << number(t.idr) << ",\n    \"motion_changes\": " << t.motion_changes
+        << ", \"motion_flickers\": " << t.motion_flickers
+        << ", \"flickering_tracks\": " << t.flickering_tracks << "}";
+  }
+  out << "\n}\n";
   return out.str();
 }
 
@@ -260,6 +275,22 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
   row("position [m]", result.position_error_m, 1.0, 2);
   row("speed [m/s]", result.speed_error_mps, 1.0, 2);
   row("heading [deg] (dynamic only)", result.heading_error_rad, 180.0 / M_PI, 1);
+  if (result.tracking)
+  {
+    const TrackingMetrics& t = *result.tracking;
+    out << "\n## Tracking (CLEAR MOT and identity measures, ground-truth identities: the tracklets)\n\n"
+        << "| MOTA [%] | IDF1 [%] | IDP [%] | IDR [%] | GT | matched | FP | missed | ID switches | per 100 "
+           "matched | fragmentations |\n|---|---|---|---|---|---|---|---|---|---|---|\n"
+        << "| " << percent(t.mota) << " | " << percent(t.idf1) << " | " << percent(t.idp) << " | "
+        << percent(t.idr) << " | " << t.ground_truth << " | " << t.matches << " | " << t.false_positives
+        << " | " << t.misses << " | " << t.id_switches << " | " << number(t.id_switches_per_100, 2) << " | "
+        << t.fragmentations << " |\n\n"
+        << "| truth tracks | mostly tracked | mostly lost | motion changes (truth constant) | flickers (2 "
+           "changes "
+           "within the window) | flickering tracks |\n|---|---|---|---|---|---|\n"
+        << "| " << t.truth_tracks << " | " << t.mostly_tracked << " | " << t.mostly_lost << " | "
+        << t.motion_changes << " | " << t.motion_flickers << " | " << t.flickering_tracks << " |\n";
+  }
   return out.str();
 }
 

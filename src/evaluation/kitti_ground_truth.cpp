@@ -253,6 +253,8 @@ std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive,
       o.difficult = gt.truncation > config.max_truncation || p.occlusion >= config.difficult_occlusion ||
                     (p.truncation >= config.difficult_truncation_flag && p.truncation != 99);
       o.has_state = true;
+      o.track_id = static_cast<std::int64_t>(k);
+      o.time_s = times[j];
       o.x = world[j].x();
       o.y = world[j].y();
       if (tracklet.poses.size() < 2)

@@ -56,6 +56,7 @@ EvalObject toEvalObject(const DetectedObject& object, const std::string& frame_n
   o.box = BoundingBox{object.x_min, object.y_min, object.x_max, object.y_max};
   o.score = object.score;
   o.has_state = true;
+  o.track_id = object.id;
   o.x = object.position.x;
   o.y = object.position.y;
   o.vx = object.velocity.x;
@@ -149,6 +150,7 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
           continue;
         }
         kept.objects.push_back(toEvalObject(object, frame_name, velo_from_world, label));
+        kept.objects.back().time_s = times[static_cast<std::size_t>(frame)];
       }
       const auto existing = by_frame.find(frame);
       if (existing != by_frame.end())

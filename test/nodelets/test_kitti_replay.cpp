@@ -1,12 +1,14 @@
 // rostest: kitti_replay.launch on a short synthetic drive. Collects the objects of the whole
 // chain and checks their motion labels against the drive's ground truth (tracklets + OXTS):
-// at least 80 % of the matched objects right, moving actors dynamic, parked ones static.
+// at least 80 % of the matched objects right, moving actors dynamic, parked ones static; and
+// that the chain keeps the objects' ids across the replay (tracking, issue 12).
 #include <gtest/gtest.h>
 
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 
 #include <mutex>
+#include <set>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
@@ -100,6 +102,26 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
   // Both kinds are mostly right on their own.
   EXPECT_GE(c[kS][kS], 4 * c[kS][kD]) << "parked objects called dynamic";
   EXPECT_GE(c[kD][kD], c[kD][kS]) << "moving objects called static";
+
+  // Ids: every actor keeps its id over the replay (at most one switch per 100 matches; the
+  // per-frame indices of the paper's output switch on most frames with several objects).
+  TrackingEvaluationConfig tracking;
+  tracking.max_longitudinal_m = config.max_longitudinal_m;
+  const TrackingMetrics t = evaluateTracking(evalObjects(truth), detections, tracking);
+  ::testing::Test::RecordProperty("id_switches", static_cast<int>(t.id_switches));
+  ASSERT_GE(t.matches, 40U);
+  EXPECT_LE(t.id_switches_per_100, 1.0) << t.id_switches << " id switches in " << t.matches << " matches";
+  EXPECT_GE(t.idf1, 0.9) << "IDTP " << t.idtp << ", IDFP " << t.idfp << ", IDFN " << t.idfn;
+  std::set<std::uint32_t> ids;
+  for (const auto& msg : received)
+  {
+    for (const DetectedObject& o : msg->objects)
+    {
+      ids.insert(o.id);
+    }
+  }
+  EXPECT_GE(ids.size(), 4U) << "track ids, not indices in the array";
+  EXPECT_EQ(ids.count(0U), 0U) << "track ids start at 1";
 }
 
 }  // namespace

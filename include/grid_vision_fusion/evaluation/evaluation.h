@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,10 @@ struct EvalObject
   bool has_state = false;       ///< position/velocity below are valid
   double x = 0.0, y = 0.0;      ///< position [m] (world frame)
   double vx = 0.0, vy = 0.0;    ///< velocity [m/s] (world frame)
+  /// Identity across frames: the tracklet of a ground-truth object, DetectedObject.id of a
+  /// detection; −1 when unknown (label files). Only the tracking metrics use it.
+  std::int64_t track_id = -1;
+  double time_s = 0.0;  ///< time of the frame [s] (the tracking metrics' flicker window)
 };
 
 /// Parameters of evaluate().
@@ -114,6 +119,57 @@ struct MatchedObject
 /// dynamic).
 using MotionCounts = std::array<std::size_t, 3>;
 
+/// Parameters of evaluateTracking().
+struct TrackingEvaluationConfig
+{
+  double iou_threshold = 0.5;        ///< minimum IoU of a match, (0, 1]
+  double max_longitudinal_m = 30.0;  ///< objects farther ahead are left out [m], > 0
+  /// Two changes of the reported motion of one ground-truth object within this time, while its
+  /// truth motion stays the same, are a flicker [s], > 0.
+  double flicker_window_s = 2.0;
+
+  /// @throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+/// Multi-object tracking figures: CLEAR MOT (Bernardin and Stiefelhagen, 2008) and identity
+/// measures (Ristani et al., 2016), over the non-difficult ground truth in range. Matching per
+/// frame: same label and IoU >= the threshold; a ground-truth object keeps the detection id it
+/// had in its previous matched frame while that detection still qualifies, the rest are
+/// assigned by the Hungarian method on IoU. Detections that match only difficult ground truth
+/// are ignored. Ground-truth identities are the track_id of the ground truth (tracklets).
+struct TrackingMetrics
+{
+  std::size_t ground_truth = 0;     ///< ground-truth object-frames
+  std::size_t matches = 0;          ///< matched object-frames (true positives)
+  std::size_t false_positives = 0;  ///< detections without a ground truth
+  std::size_t misses = 0;           ///< ground-truth object-frames without a detection
+  /// A ground-truth object matched to another detection id than at its previous match.
+  std::size_t id_switches = 0;
+  /// A ground-truth object matched again after frames without a match (its track interrupted).
+  std::size_t fragmentations = 0;
+  double mota = 0.0;                 ///< 1 − (misses + false positives + id switches) / ground truth
+  double id_switches_per_100 = 0.0;  ///< id switches per 100 matched object-frames
+  std::size_t truth_tracks = 0;      ///< ground-truth identities with a non-difficult frame in range
+  std::size_t mostly_tracked = 0;    ///< matched in >= 80 % of their frames
+  std::size_t mostly_lost = 0;       ///< matched in < 20 % of their frames
+  /// Identity measures: the one-to-one matching of ground-truth identities to detection ids
+  /// with the most co-matched object-frames (IDTP); IDF1 = 2 IDTP / (2 IDTP + IDFP + IDFN).
+  std::size_t idtp = 0;
+  std::size_t idfp = 0;
+  std::size_t idfn = 0;
+  double idf1 = 0.0;
+  double idp = 0.0;  ///< IDTP / (IDTP + IDFP)
+  double idr = 0.0;  ///< IDTP / (IDTP + IDFN)
+  /// Motion stability over the matched frames of each ground-truth object whose truth motion
+  /// (static or dynamic) is the same in two consecutive matched frames: reported motion changes
+  /// between them, and flickers (a change less than flicker_window_s after the previous change
+  /// of the same object, the truth motion constant in between).
+  std::size_t motion_changes = 0;
+  std::size_t motion_flickers = 0;
+  std::size_t flickering_tracks = 0;  ///< ground-truth identities with at least one flicker
+};
+
 /// Everything evaluate() measures.
 struct EvaluationResult
 {
@@ -131,7 +187,16 @@ struct EvaluationResult
   std::map<std::string, std::array<std::array<std::size_t, 3>, 3>> motion_confusion_by_class;
   /// Per class, then per truth speed band: the predicted-motion counts of the matches.
   std::map<std::string, std::map<SpeedBand, MotionCounts>> motion_by_class_and_band;
+  /// evaluateTracking()'s figures when the caller computed them (evaluate() does not).
+  std::optional<TrackingMetrics> tracking;
 };
+
+/// Tracking figures of `detections` against `ground_truth` (see TrackingMetrics). Objects
+/// without a track_id (−1) count as detections and ground truth each with an identity of its
+/// own per frame.
+TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
+                                 const std::vector<EvalObject>& detections,
+                                 const TrackingEvaluationConfig& config);
 
 /// Class name of an object: "dynamicCar" for (kDynamic, "car") when `with_motion`, else "car".
 std::string evaluationClass(const std::string& label, Motion motion, bool with_motion);

@@ -55,14 +55,14 @@ struct DetectionBagResult
 
 /// One DetectedObject as an EvalObject of frame `frame_name`: box, label (labelOf() of
 /// `labels`: lower-cased then mapped), score, motion, position and velocity of the message
-/// frame (has_state = true), longitudinal distance = x of the position (z = 0) in the velodyne
+/// frame (has_state = true), track_id = id, longitudinal distance = x of the position (z = 0) in the velodyne
 /// frame, given `velo_from_world`.
 EvalObject toEvalObject(const DetectedObject& object, const std::string& frame_name,
                         const Eigen::Isometry3d& velo_from_world, const std::string& label);
 
 /// Reads the DetectedObjectArray messages on config.topic of the bag at `bag_path` and matches
-/// them to the frames of `drive` by header stamp. `progress` (optional) is called with
-/// (messages read, messages on the topic).
+/// them to the frames of `drive` by header stamp (time_s of the objects: the frame's time). `progress`
+/// (optional) is called with (messages read, messages on the topic).
 /// @throws std::runtime_error naming the bag when it cannot be opened, has no message on the
 /// topic (listing the topics it has) or the topic carries another type.
 DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDrive& drive,

@@ -1,0 +1,127 @@
+// Unit tests of the tracking metrics (CLEAR MOT, identity measures, motion flicker) on
+// hand-made sequences; every figure is worked out in the comment next to it.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "grid_vision_fusion/evaluation/evaluation.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+const BoundingBox kBox{100.F, 100.F, 199.F, 199.F};
+const BoundingBox kElsewhere{400.F, 100.F, 499.F, 199.F};
+
+EvalObject object(int frame, std::int64_t track, Motion motion, BoundingBox box = kBox,
+                  const std::string& label = "car")
+{
+  EvalObject o;
+  o.frame = "000000000" + std::to_string(frame);
+  o.time_s = 0.1 * frame;
+  o.label = label;
+  o.motion = motion;
+  o.box = box;
+  o.track_id = track;
+  o.longitudinal_m = 10.0;
+  return o;
+}
+}  // namespace
+
+TEST(TrackingEvaluation, SwitchFragmentationMotaIdf1AndFlicker)
+{
+  // One parked car (tracklet 7) in frames 0-4. The tracker reports it as id 1 in frames 0, 1,
+  // loses it in frame 2, reports it as id 2 in frames 3, 4, plus a false car (id 9) in frame 4.
+  // A difficult truth (tracklet 8) in frame 0 has a detection (id 5): ignored.
+  std::vector<EvalObject> truth, detections;
+  for (int f = 0; f < 5; ++f)
+  {
+    truth.push_back(object(f, 7, Motion::kStatic));
+  }
+  EvalObject difficult = object(0, 8, Motion::kStatic, kElsewhere);
+  difficult.difficult = true;
+  truth.push_back(difficult);
+  detections.push_back(object(0, 5, Motion::kStatic, kElsewhere));
+  detections.push_back(object(0, 1, Motion::kStatic));
+  detections.push_back(object(1, 1, Motion::kDynamic));  // motion change 1 (t = 0.1)
+  detections.push_back(object(3, 2, Motion::kStatic));   // change 2 at t = 0.3: a flicker
+  detections.push_back(object(4, 2, Motion::kStatic));
+  detections.push_back(object(4, 9, Motion::kStatic, kElsewhere));
+
+  const TrackingMetrics m = evaluateTracking(truth, detections, TrackingEvaluationConfig{});
+  EXPECT_EQ(m.ground_truth, 5U);
+  EXPECT_EQ(m.matches, 4U);
+  EXPECT_EQ(m.misses, 1U);           // frame 2
+  EXPECT_EQ(m.false_positives, 1U);  // id 9; id 5 matches the difficult truth only
+  EXPECT_EQ(m.id_switches, 1U);      // 1 -> 2 in frame 3
+  EXPECT_EQ(m.fragmentations, 1U);   // tracked again in frame 3 after the miss
+  EXPECT_DOUBLE_EQ(m.mota, 1.0 - 3.0 / 5.0);
+  EXPECT_DOUBLE_EQ(m.id_switches_per_100, 25.0);
+  // Identities: tracklet 7 is co-matched 2 frames with id 1 and 2 with id 2; one of them is its
+  // identity: IDTP 2, IDFN 5 - 2 = 3, IDFP (2 + 2 + 1) - 2 = 3; IDF1 = 4 / (4 + 3 + 3).
+  EXPECT_EQ(m.idtp, 2U);
+  EXPECT_EQ(m.idfn, 3U);
+  EXPECT_EQ(m.idfp, 3U);
+  EXPECT_DOUBLE_EQ(m.idf1, 0.4);
+  EXPECT_EQ(m.truth_tracks, 1U);
+  EXPECT_EQ(m.mostly_tracked, 1U);  // 4 of 5 frames
+  EXPECT_EQ(m.motion_changes, 2U);
+  EXPECT_EQ(m.motion_flickers, 1U);
+  EXPECT_EQ(m.flickering_tracks, 1U);
+}
+
+TEST(TrackingEvaluation, AKeptCorrespondenceWinsOverABetterOverlap)
+{
+  // Frame 0: truth 1 matched to id 10. Frame 1: ids 10 and 11 both overlap truth 1, id 11
+  // better; the correspondence with id 10 is kept (no switch), id 11 is a false positive.
+  const BoundingBox shifted{105.F, 100.F, 204.F, 199.F};
+  std::vector<EvalObject> truth{object(0, 1, Motion::kStatic), object(1, 1, Motion::kStatic)};
+  std::vector<EvalObject> detections{object(0, 10, Motion::kStatic), object(1, 10, Motion::kStatic, shifted),
+                                     object(1, 11, Motion::kStatic, kBox)};
+  const TrackingMetrics m = evaluateTracking(truth, detections, TrackingEvaluationConfig{});
+  EXPECT_EQ(m.id_switches, 0U);
+  EXPECT_EQ(m.matches, 2U);
+  EXPECT_EQ(m.false_positives, 1U);
+  EXPECT_DOUBLE_EQ(m.mota, 0.5);
+  EXPECT_DOUBLE_EQ(m.idf1, 2.0 * 2.0 / (2.0 * 2.0 + 1.0 + 0.0));  // IDTP 2, IDFP 1, IDFN 0
+}
+
+TEST(TrackingEvaluation, PerFrameIndicesSwitchAndTruthChangesAreNoFlicker)
+{
+  // Two cars in every frame; the per-frame output numbers them 0, 1 in detection order, which
+  // swaps in frame 1: two id switches. Car 1 starts moving in frame 2 and the output follows:
+  // a motion change with a truth change is not counted.
+  std::vector<EvalObject> truth, detections;
+  for (int f = 0; f < 3; ++f)
+  {
+    const Motion second = f >= 2 ? Motion::kDynamic : Motion::kStatic;
+    truth.push_back(object(f, 0, Motion::kStatic));
+    truth.push_back(object(f, 1, second, kElsewhere));
+    const bool swapped = f == 1;
+    detections.push_back(object(f, swapped ? 1 : 0, Motion::kStatic));
+    detections.push_back(object(f, swapped ? 0 : 1, second, kElsewhere));
+  }
+  const TrackingMetrics m = evaluateTracking(truth, detections, TrackingEvaluationConfig{});
+  EXPECT_EQ(m.id_switches, 4U);  // both in frame 1, both back in frame 2
+  EXPECT_EQ(m.motion_changes, 0U);
+  EXPECT_EQ(m.motion_flickers, 0U);
+  EXPECT_DOUBLE_EQ(m.mota, 1.0 - 4.0 / 6.0);
+}
+
+TEST(TrackingEvaluation, LabelsAndRangeAndConfig)
+{
+  EvalObject far = object(0, 3, Motion::kStatic);
+  far.longitudinal_m = 45.0;
+  const TrackingMetrics m =
+      evaluateTracking({far, object(0, 4, Motion::kStatic, kElsewhere)},
+                       {object(0, 1, Motion::kStatic, kElsewhere, "van")}, TrackingEvaluationConfig{});
+  EXPECT_EQ(m.ground_truth, 1U);  // the far car is out of range
+  EXPECT_EQ(m.matches, 0U);       // a van does not match a car
+  EXPECT_EQ(m.false_positives, 1U);
+  EXPECT_EQ(m.mostly_lost, 1U);
+  TrackingEvaluationConfig bad;
+  bad.flicker_window_s = 0.0;
+  EXPECT_THROW(evaluateTracking({}, {}, bad), std::invalid_argument);
+}
+
+}  // namespace grid_vision_fusion
