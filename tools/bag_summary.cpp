@@ -1,6 +1,7 @@
-// bag_summary: what a recorded run of the perception chain contains. Prints objects per frame
-// and the static/dynamic/unknown counts per class of a DetectedObjectArray topic, and exports the
-// overlay images (objects/image) as PNG frames and an MJPG video.
+// bag_summary: what a recorded run of the perception chain contains. Prints objects per frame,
+// the static/dynamic/unknown counts per class and the tracks (objects by id) of a
+// DetectedObjectArray topic, and exports the overlay images (objects/image) as PNG frames and an
+// MJPG video.
 //
 //   rosrun grid_vision_fusion bag_summary --bag objects.bag [--objects /objects]
 //       [--images /objects/image] [--frames-dir DIR] [--video FILE.avi]
@@ -30,7 +31,8 @@ const char* const kUsage =
     "usage: bag_summary --bag FILE [options]\n"
     "\n"
     "Summarises a bag recorded from the perception chain: objects per frame, static / dynamic /\n"
-    "unknown counts per class, mean speed of the dynamic objects; exports the overlay images.\n"
+    "unknown counts per class, mean speed of the dynamic objects, the tracks (objects by id: label,\n"
+    "frames, time span, motion counts and changes); exports the overlay images.\n"
     "\n"
     "options:\n"
     "  --bag FILE         the recorded bag (required)\n"
@@ -50,6 +52,17 @@ struct Counts
 {
   std::size_t by_motion[3] = {0, 0, 0};
   double dynamic_speed_sum = 0.0;
+};
+
+/// One id of the objects (a track where the fusion tracks).
+struct TrackSummary
+{
+  std::string label;
+  Counts counts;
+  double first_s = 0.0;
+  double last_s = 0.0;
+  std::uint8_t last_motion = 0;
+  std::size_t motion_changes = 0;
 };
 }  // namespace
 
@@ -109,6 +122,7 @@ int main(int argc, char** argv)
       std::filesystem::create_directories(frames_dir);
     }
     std::map<std::string, Counts> per_class;
+    std::map<std::uint32_t, TrackSummary> tracks;
     std::map<std::size_t, std::size_t> frames_with_n_objects;
     std::size_t frames = 0, images = 0;
     cv::VideoWriter video;
@@ -121,13 +135,29 @@ int main(int argc, char** argv)
       {
         ++frames;
         ++frames_with_n_objects[objects->objects.size()];
+        const double stamp_s = objects->header.stamp.toSec();
         for (const DetectedObject& o : objects->objects)
         {
-          Counts& c = per_class[o.label];
-          ++c.by_motion[std::min<std::size_t>(o.motion, 2)];
-          if (o.motion == DetectedObject::MOTION_DYNAMIC)
+          const auto [entry, created] = tracks.try_emplace(o.id);
+          TrackSummary& track = entry->second;
+          if (created)
           {
-            c.dynamic_speed_sum += std::hypot(o.velocity.x, o.velocity.y);
+            track.label = o.label;
+            track.first_s = stamp_s;
+          }
+          else if (o.motion != track.last_motion)
+          {
+            ++track.motion_changes;
+          }
+          track.last_s = stamp_s;
+          track.last_motion = o.motion;
+          for (Counts* c : {&per_class[o.label], &track.counts})
+          {
+            ++c->by_motion[std::min<std::size_t>(o.motion, 2)];
+            if (o.motion == DetectedObject::MOTION_DYNAMIC)
+            {
+              c->dynamic_speed_sum += std::hypot(o.velocity.x, o.velocity.y);
+            }
           }
         }
       }
@@ -180,6 +210,24 @@ int main(int argc, char** argv)
           line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1], c.by_motion[2],
           c.by_motion[0],
           c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5).c_str() : "-");
+      std::cout << line;
+    }
+    std::cout
+        << "\n"
+        << tracks.size() << " tracks (objects by id; with tracking off the id is the index in the array)\n"
+        << "id       label        frames  first [s]     last [s]   static  dynamic  unknown  changes  mean "
+           "speed of dynamic [m/s]\n";
+    for (const auto& [id, t] : tracks)
+    {
+      const std::size_t frames_seen = t.counts.by_motion[0] + t.counts.by_motion[1] + t.counts.by_motion[2];
+      char line[200];
+      std::snprintf(
+          line, sizeof(line), "%-8u %-12s %6zu %10.3f %12.3f %8zu %8zu %8zu %8zu  %s\n", id, t.label.c_str(),
+          frames_seen, t.first_s, t.last_s, t.counts.by_motion[1], t.counts.by_motion[2],
+          t.counts.by_motion[0], t.motion_changes,
+          t.counts.by_motion[2]
+              ? std::to_string(t.counts.dynamic_speed_sum / t.counts.by_motion[2]).substr(0, 5).c_str()
+              : "-");
       std::cout << line;
     }
   }

@@ -17,9 +17,10 @@ namespace
 {
 namespace fs = std::filesystem;
 
-DetectedObject object(const std::string& label, std::uint8_t motion, double vx)
+DetectedObject object(std::uint32_t id, const std::string& label, std::uint8_t motion, double vx)
 {
   DetectedObject o;
+  o.id = id;
   o.label = label;
   o.motion = motion;
   o.velocity.x = vx;
@@ -53,14 +54,15 @@ TEST(BagSummary, CountsAndExportsFrames)
       const ros::Time stamp(100 + frame, 0);
       DetectedObjectArray objects;
       objects.header.stamp = stamp;
-      objects.objects.push_back(object("car", DetectedObject::MOTION_DYNAMIC, 4.0));
-      if (frame > 0)
+      objects.objects.push_back(object(3, "car", DetectedObject::MOTION_DYNAMIC, 4.0));
+      if (frame > 0)  // track 4: static, then dynamic at 2 m/s
       {
-        objects.objects.push_back(object("car", DetectedObject::MOTION_STATIC, 0.0));
+        objects.objects.push_back(object(
+            4, "car", frame == 1 ? DetectedObject::MOTION_STATIC : DetectedObject::MOTION_DYNAMIC, 2.0));
       }
       if (frame == 2)
       {
-        objects.objects.push_back(object("van", DetectedObject::MOTION_UNKNOWN, 0.0));
+        objects.objects.push_back(object(5, "van", DetectedObject::MOTION_UNKNOWN, 0.0));
       }
       bag.write("/objects", stamp, objects);
       sensor_msgs::Image image;
@@ -82,9 +84,26 @@ TEST(BagSummary, CountsAndExportsFrames)
   EXPECT_NE(output.find("1 object(s): 1 frame(s)"), std::string::npos) << output;
   EXPECT_NE(output.find("2 object(s): 1 frame(s)"), std::string::npos) << output;
   EXPECT_NE(output.find("3 object(s): 1 frame(s)"), std::string::npos) << output;
-  // car: 2 static, 3 dynamic at 4 m/s; van: 1 unknown.
-  EXPECT_NE(output.find("car                 2        3        0  4.000"), std::string::npos) << output;
+  // car: 1 static, 4 dynamic at (4 + 4 + 4 + 2) / 4 = 3.5 m/s; van: 1 unknown.
+  EXPECT_NE(output.find("car                 1        4        0  3.500"), std::string::npos) << output;
   EXPECT_NE(output.find("van                 0        0        1  -"), std::string::npos) << output;
+  // Tracks: 3 (car, frames 0-2, dynamic), 4 (car, frames 1-2, one change), 5 (van, frame 2).
+  EXPECT_NE(output.find("3 tracks (objects by id"), std::string::npos) << output;
+  EXPECT_NE(
+      output.find(
+          "3        car               3    100.000      102.000        0        3        0        0  4.000"),
+      std::string::npos)
+      << output;
+  EXPECT_NE(
+      output.find(
+          "4        car               2    101.000      102.000        1        1        0        1  2.000"),
+      std::string::npos)
+      << output;
+  EXPECT_NE(
+      output.find(
+          "5        van               1    102.000      102.000        0        0        1        0  -"),
+      std::string::npos)
+      << output;
   EXPECT_TRUE(fs::exists(dir / "frames" / "000002.png"));
   EXPECT_GT(fs::file_size(dir / "overlay.avi"), 0U);
 
