@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"
 #include "grid_vision_fusion/simulation/synthetic_world.h"
 
@@ -224,4 +225,15 @@ BENCHMARK(BM_CycleCells)
 }  // namespace
 }  // namespace grid_vision_fusion
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv)
+{
+  benchmark::AddCustomContext("machine", grid_vision_fusion::machineInfo().describe());
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv))
+  {
+    return 1;
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/projection/grid_projection.h"
 
 namespace grid_vision_fusion
@@ -107,4 +108,15 @@ BENCHMARK(BM_ProjectGrid)
 }  // namespace
 }  // namespace grid_vision_fusion
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv)
+{
+  benchmark::AddCustomContext("machine", grid_vision_fusion::machineInfo().describe());
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv))
+  {
+    return 1;
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -19,8 +19,8 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <thread>
 
+#include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 
 namespace
@@ -28,54 +28,6 @@ namespace
 using namespace grid_vision_fusion;
 
 const std::string kCfgDir = GVF_YOLO_CFG_DIR;
-
-/// Peak single-precision throughput of this machine, from /proc/cpuinfo.
-struct MachinePeak
-{
-  int cores = 1;
-  double ghz = 0.0;
-  int flops_per_cycle = 0;
-  std::string model;
-  double gflops() const { return cores * ghz * flops_per_cycle; }
-};
-
-MachinePeak machinePeak()
-{
-  MachinePeak peak;
-  peak.cores = static_cast<int>(std::thread::hardware_concurrency());
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string flags;
-  for (std::string line; std::getline(cpuinfo, line);)
-  {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos)
-    {
-      continue;
-    }
-    const std::string key = line.substr(0, line.find_last_not_of(" \t", colon - 1) + 1);
-    const std::string value = line.substr(colon + 1);
-    if (key == "cpu MHz" && peak.ghz == 0.0)
-    {
-      peak.ghz = std::atof(value.c_str()) / 1000.0;
-    }
-    else if (key == "model name" && peak.model.empty())
-    {
-      peak.model = value;
-    }
-    else if (key == "flags" && flags.empty())
-    {
-      flags = " " + value + " ";
-    }
-  }
-  const bool fma = flags.find(" fma ") != std::string::npos;
-  const bool avx2 = flags.find(" avx2 ") != std::string::npos;
-  const bool avx = flags.find(" avx ") != std::string::npos;
-  // FP32 FLOPs per cycle and core: two 256-bit FMA pipes × 8 lanes × 2 (multiply + add) with
-  // AVX2+FMA; AVX-512 is counted the same (AMD Zen 4 executes it on the same 256-bit pipes;
-  // Intel cores with two 512-bit FMA units would double it); AVX alone: 8-lane add + multiply.
-  peak.flops_per_cycle = (fma && avx2) ? 32 : (avx ? 16 : 8);
-  return peak;
-}
 
 /// Writes Darknet weights for `cfg_path` with He-initialised random kernels, zero biases and
 /// identity batch normalisation (activations stay in a normal floating-point range).
@@ -137,7 +89,7 @@ struct Model
 };
 
 void benchmarkModel(benchmark::State& state, const Model& model, const std::string& weights,
-                    const MachinePeak& peak)
+                    const MachineInfo& peak)
 {
   YoloDetectorConfig config;
   config.model_path = kCfgDir + "/" + model.cfg;
@@ -164,20 +116,20 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
   // A rate counter is divided by the measured (real) time: achieved GFLOP per second.
   state.counters["achieved_GFLOP"] =
       benchmark::Counter(flops / 1e9 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  state.counters["peak_GFLOPs"] = peak.gflops();
-  state.counters["FLOP_bound_ms"] = flops / (peak.gflops() * 1e9) * 1e3;
+  state.counters["peak_GFLOPs"] = peak.peakGflops();
+  state.counters["FLOP_bound_ms"] = flops / (peak.peakGflops() * 1e9) * 1e3;
 }
 
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  const MachinePeak peak = machinePeak();
+  const MachineInfo peak = machineInfo();
   cv::setNumThreads(peak.cores);
   std::ostringstream peak_text;
-  peak_text << peak.cores << " cores x " << peak.ghz << " GHz x " << peak.flops_per_cycle
-            << " FP32 FLOP/cycle = " << peak.gflops() << " GFLOP/s";
-  benchmark::AddCustomContext("cpu", peak.model);
+  peak_text << peak.cores << " cores x " << peak.mhz / 1000.0 << " GHz x " << peak.flopsPerCycle()
+            << " FP32 FLOP/cycle = " << peak.peakGflops() << " GFLOP/s";
+  benchmark::AddCustomContext("machine", peak.describe());
   benchmark::AddCustomContext("peak", peak_text.str());
   benchmark::AddCustomContext(
       "opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");

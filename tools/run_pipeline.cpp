@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/offline/pipeline.h"
 
@@ -226,6 +227,7 @@ int run(const Options& o)
     const double fus = medianOf(s.fusion_ms);
     const double frames = static_cast<double>(std::max<std::size_t>(summary.frames, 1));
     const double wall_per_frame = 1e3 * summary.wall_s / frames;
+    std::printf("benchmark on %s\n", gvf::machineInfo().describe().c_str());
     std::printf("benchmark: %zu frames, bag %.1f s, wall %.1f s\n", summary.frames, summary.bag_duration_s,
                 summary.wall_s);
     std::printf(

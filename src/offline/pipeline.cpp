@@ -156,6 +156,7 @@ void Pipeline::advanceTo(const ros::Time& bag_time)
 void Pipeline::finish()
 {
   release(true);
+  collectDetection();
 }
 
 bool Pipeline::tfReady(const Pending& p) const
@@ -264,11 +265,11 @@ void Pipeline::processCloud(const sensor_msgs::PointCloud2& msg)
 
 void Pipeline::processImage(const sensor_msgs::Image::ConstPtr& msg)
 {
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<Detection> detections;
+  collectDetection();  // one detection at a time: the detector is not thread-safe
+  std::int64_t frame_index = -1;
   try
   {
-    detections = detector_->detect(msg, detector_->frameIndex(*msg));
+    frame_index = detector_->frameIndex(*msg);
   }
   catch (const std::exception& e)
   {
@@ -276,9 +277,38 @@ void Pipeline::processImage(const sensor_msgs::Image::ConstPtr& msg)
     warn(std::string("yolo_detector: image not processed: ") + e.what());
     return;
   }
-  Detection2DArray::ConstPtr out = detectionsToMsg(msg->header, msg->width, msg->height, detections);
+  auto detect = [this, msg, frame_index]
+  {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<Detection> detections = detector_->detect(msg, frame_index);
+    return std::make_pair(std::move(detections), elapsedMs(start));
+  };
+  detecting_ = msg;
+  detection_ = std::async(config_.overlap_detector ? std::launch::async : std::launch::deferred, detect);
+}
+
+void Pipeline::collectDetection()
+{
+  if (!detecting_)
+  {
+    return;
+  }
+  const sensor_msgs::Image::ConstPtr msg = std::move(detecting_);
+  detecting_.reset();
+  std::pair<std::vector<Detection>, double> result;
+  try
+  {
+    result = detection_.get();
+  }
+  catch (const std::exception& e)
+  {
+    ++stats_.detector_drops;
+    warn(std::string("yolo_detector: image not processed: ") + e.what());
+    return;
+  }
+  Detection2DArray::ConstPtr out = detectionsToMsg(msg->header, msg->width, msg->height, result.first);
   ++stats_.detections;
-  stats_.detector_ms.push_back(elapsedMs(start));
+  stats_.detector_ms.push_back(result.second);
   if (outputs_.detections)
   {
     outputs_.detections(out);

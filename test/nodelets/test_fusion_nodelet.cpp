@@ -3,11 +3,14 @@
 // handling of malformed input.
 #include <gtest/gtest.h>
 
+#include <nodelet/NodeletLoad.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -137,6 +140,39 @@ TEST_F(FusionNodeletTest, BadParameterLeavesTheNodeletInactive)
   pub_detections_.publish(makeDetections(stamp));
   pub_grid_.publish(makeGrid(stamp));
   EXPECT_TRUE(waitFor([this] { return !received_.empty(); }, 10.0)) << "the manager stopped serving";
+}
+
+TEST_F(FusionNodeletTest, AMisspeltParameterIsReportedWithTheNearestValidOne)
+{
+  std::vector<std::string> warnings;
+  ros::Subscriber rosout = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100,
+                                                             [&](const rosgraph_msgs::Log::ConstPtr& m)
+                                                             {
+                                                               if (m->level == rosgraph_msgs::Log::WARN)
+                                                               {
+                                                                 warnings.push_back(m->msg);
+                                                               }
+                                                             });
+  // The manager is one of the /rosout publishers; give the connections a moment before it logs.
+  ASSERT_TRUE(waitFor([&] { return rosout.getNumPublishers() > 1; }, 10.0)) << "no publisher on /rosout";
+  waitFor([] { return false; }, 1.5);
+  ros::param::set("/misspelt/fusion/band_abvoe", 0.3);
+  nodelet::NodeletLoad load;
+  load.request.name = "/misspelt/fusion";
+  load.request.type = "grid_vision_fusion/fusion";
+  ASSERT_TRUE(ros::service::call("/manager/load_nodelet", load)) << "the manager refused to load the nodelet";
+  EXPECT_TRUE(load.response.success);
+  auto reported = [&]
+  {
+    return std::any_of(warnings.begin(), warnings.end(),
+                       [](const std::string& w)
+                       {
+                         return w.find("/misspelt/fusion/band_abvoe") != std::string::npos &&
+                                w.find("did you mean band_above?") != std::string::npos;
+                       });
+  };
+  EXPECT_TRUE(waitFor(reported, 10.0))
+      << "no warning naming the misspelt parameter and the nearest valid one";
 }
 
 TEST_F(FusionNodeletTest, LazyWhileNobodyListens)

@@ -103,12 +103,22 @@ PipelineConfig replayConfig(const std::string& label_dir)
 
 using ObjectsByStamp = std::map<ros::Time, DetectedObjectArray::ConstPtr>;
 
-ObjectsByStamp runPipeline()
+/// The objects of a run by stamp; `order` (when given) receives the stamps in output order.
+ObjectsByStamp runPipeline(bool overlap_detector = true, std::vector<ros::Time>* order = nullptr)
 {
   ObjectsByStamp out;
   PipelineOutputs outputs;
-  outputs.objects = [&out](const DetectedObjectArray::ConstPtr& m) { out[m->header.stamp] = m; };
-  Pipeline pipeline(replayConfig(drive().dir + "/label_2"), outputs);
+  outputs.objects = [&](const DetectedObjectArray::ConstPtr& m)
+  {
+    out[m->header.stamp] = m;
+    if (order)
+    {
+      order->push_back(m->header.stamp);
+    }
+  };
+  PipelineConfig config = replayConfig(drive().dir + "/label_2");
+  config.overlap_detector = overlap_detector;
+  Pipeline pipeline(config, outputs);
   runPipelineOnBag(pipeline, drive().bag, PipelineTopics());
   return out;
 }
@@ -135,6 +145,22 @@ TEST(PipelineEquivalence, TwoRunsGiveIdenticalOutput)
     objects += msg->objects.size();
   }
   EXPECT_GT(objects, 0U);
+}
+
+TEST(PipelineEquivalence, TheOverlappedDetectorChangesNothing)
+{
+  std::vector<ros::Time> order_overlapped;
+  std::vector<ros::Time> order_sequential;
+  const ObjectsByStamp overlapped = runPipeline(true, &order_overlapped);
+  const ObjectsByStamp sequential = runPipeline(false, &order_sequential);
+  EXPECT_EQ(order_overlapped, order_sequential);
+  ASSERT_EQ(overlapped.size(), sequential.size());
+  ASSERT_GE(overlapped.size(), drive().frames - 1);
+  for (const auto& [stamp, msg] : overlapped)
+  {
+    ASSERT_EQ(sequential.count(stamp), 1U);
+    EXPECT_EQ(bytesOf(*msg), bytesOf(*sequential.at(stamp))) << "objects at t=" << stamp;
+  }
 }
 
 /// The outputs of the chain, by stamp.

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <deque>
 #include <functional>
+#include <future>
 #include <map>
 #include <memory>
 #include <string>
@@ -42,6 +43,11 @@ struct PipelineConfig
   /// anyway (and dropped by its stage if tf still cannot answer) [s], >= 0. The nodelets wait
   /// for tf too (through tf message filters).
   double max_tf_wait = 0.5;
+  /// Run the detector of image k on a worker thread while the other stages go on with the
+  /// messages after it (the grid of scan k+1...). The detections are collected at fixed points
+  /// of the message sequence (before the next image, at finish()), so the output is the same,
+  /// bit for bit, as without overlap.
+  bool overlap_detector = true;
 };
 
 /// The PipelineConfig of the four parameter sources, read as the nodelets read them.
@@ -128,6 +134,8 @@ private:
   void process(const Pending& pending);
   void processCloud(const sensor_msgs::PointCloud2& msg);
   void processImage(const sensor_msgs::Image::ConstPtr& msg);
+  /// Waits for the detection in flight (if any) and hands its result on as processImage() did.
+  void collectDetection();
   void processCameraInfo(const sensor_msgs::CameraInfo& msg);
   void tryFuse(const ros::Time& stamp);
   void warn(const std::string& what);
@@ -141,6 +149,9 @@ private:
   std::unique_ptr<ProjectionStage> projection_;
   std::unique_ptr<FusionStage> fusion_;
   DynamicGrid::ConstPtr latest_grid_;
+  /// The image whose detection runs on the worker, and its result with the detector's time [ms].
+  sensor_msgs::Image::ConstPtr detecting_;
+  std::future<std::pair<std::vector<Detection>, double>> detection_;
   std::deque<Pending> queue_;  ///< sorted by (stamp, kind, order)
   std::uint64_t arrivals_ = 0;
   ros::Time bag_time_;
