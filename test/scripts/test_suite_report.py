@@ -102,6 +102,41 @@ class SuiteReportTest(unittest.TestCase):
         self.assertIn("| a | 6 | 66.7 (2/3) | 50.0 (1/2) | 0.0 (0/1) | 12 |", md)
         self.assertIn("### b", md)
 
+    def test_tracking_figures_are_summed(self):
+        # Scenario a: 10 ground-truth object-frames, 8 matched, 1 FP, 2 missed, 1 id switch;
+        # b: 5, 5 matched, 0 FP, 0 missed, 0 switches. Sums: GT 15, matched 13, FP 1, missed 2,
+        # switches 1 -> MOTA 1 - 4/15, switches per 100 matched 100/13; IDTP 8 + 5, IDFP 1 + 0,
+        # IDFN 2 + 0 -> IDF1 26 / 29.
+        args = self.two_scenarios()
+        counts = {k: 0 for k in suite_report.TRACKING_COUNTS}
+        for folder, values in ((args[2], dict(ground_truth=10, matches=8, false_positives=1, misses=2,
+                                              id_switches=1, idtp=8, idfp=1, idfn=2, motion_flickers=1)),
+                               (args[6], dict(ground_truth=5, matches=5, idtp=5))):
+            with open(os.path.join(folder, "metrics.json"), "w") as f:
+                json.dump({"tracking": dict(counts, **values)}, f)
+        status, out = self.run_report(args)
+        self.assertEqual(status, 0)
+        with open(os.path.join(out, "suite_report.json")) as f:
+            report = json.load(f)
+        t = report["tracking"]
+        self.assertEqual((t["ground_truth"], t["matches"], t["id_switches"], t["motion_flickers"]), (15, 13, 1, 1))
+        self.assertAlmostEqual(t["mota"], 1.0 - 4.0 / 15.0)
+        self.assertAlmostEqual(t["id_switches_per_100"], 100.0 / 13.0)
+        self.assertAlmostEqual(t["idf1"], 26.0 / 29.0)
+        # Motion right over the static and dynamic truths: a has static->static, dynamic->dynamic
+        # twice of 6; b has the cyclist of 2 (the truth-unknown car is left out) -> 4 of 8.
+        self.assertEqual((report["motion_right"]["found"], report["motion_right"]["total"]), (4, 8))
+        self.assertEqual(report["scenarios"][1]["tracking"]["mota"], 1.0)
+        with open(os.path.join(out, "suite_report.md")) as f:
+            md = f.read()
+        self.assertIn("## Tracking (issue 12)", md)
+        self.assertIn("| all scenarios | 13 | 50.0 | 1 | 7.69 | 0 | 73.3 | 89.7 | 0 | 1 | 0 |", md)
+        self.assertIn("| all classes | 9 |", md)
+        # A metrics.json without the tracking figures leaves them out; a broken one is an error.
+        with open(os.path.join(args[6], "metrics.json"), "w") as f:
+            json.dump({"tracking": {"matches": 1}}, f)
+        self.assertEqual(self.run_report(args)[0], 1)
+
     def test_thresholds_pass_and_fail(self):
         args = self.two_scenarios()
         junit = os.path.join(self.tmp, "junit.xml")
