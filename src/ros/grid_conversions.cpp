@@ -48,6 +48,15 @@ DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& nh)
   readParam(nh, "birth_motion_fraction", c.birth_motion_fraction);
   readParam(nh, "acceleration_sigma", c.acceleration_sigma);
   readParam(nh, "max_speed", c.max_speed);
+  readParam(nh, "vacated_to_dynamic", c.vacated_to_dynamic);
+  readParam(nh, "motion_window", c.motion_window);
+  readParam(nh, "motion_radius", c.motion_radius);
+  readParam(nh, "motion_memory", c.motion_memory);
+  readParam(nh, "unknown_to_dynamic_by_motion", c.unknown_to_dynamic_by_motion);
+  readParam(nh, "static_to_dynamic_by_motion", c.static_to_dynamic_by_motion);
+  readParam(nh, "inherit_birth_velocity", c.inherit_birth_velocity);
+  readParam(nh, "propagation_rate", c.propagation_rate);
+  readParam(nh, "propagation_length", c.propagation_length);
   int seed = static_cast<int>(c.seed);
   readParam(nh, "seed", seed);
   if (seed < 0)
@@ -73,6 +82,7 @@ DynamicGridConfig dynamicGridConfigFromParams(const ParamSource& nh)
   readParam(nh, "p_occupied", m.p_occupied);
   readParam(nh, "p_free", m.p_free);
   readParam(nh, "range_sigma", m.range_sigma);
+  readParam(nh, "hit_neighbours_not_free", m.hit_neighbours_not_free);
   c.validate();
   return c;
 }
