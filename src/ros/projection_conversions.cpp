@@ -65,6 +65,13 @@ GridCellsView gridCellsViewOf(const DynamicGrid& msg)
   view.p_dynamic = msg.p_dynamic.data();
   view.vx = msg.vx.data();
   view.vy = msg.vy.data();
+  // The variances are optional (the Mahalanobis test of the projection is skipped without them).
+  const std::size_t cells = view.size();
+  if (msg.v_var_x.size() == cells && msg.v_var_y.size() == cells)
+  {
+    view.v_var_x = msg.v_var_x.data();
+    view.v_var_y = msg.v_var_y.data();
+  }
   return view;
 }
 
@@ -124,6 +131,8 @@ GridProjectionConfig gridProjectionConfigFromParams(const ParamSource& nh)
   GridProjectionConfig config;
   readParam(nh, "occupied_threshold", config.occupied_threshold);
   readParam(nh, "dynamic_ratio", config.dynamic_ratio);
+  readParam(nh, "min_dynamic_speed", config.min_dynamic_speed);
+  readParam(nh, "mahalanobis_threshold", config.mahalanobis_threshold);
   readParam(nh, "min_depth", config.min_depth);
   readParam(nh, "column_mode", config.column_mode);
   readParam(nh, "column_height", config.column_height);
