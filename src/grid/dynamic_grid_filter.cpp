@@ -15,6 +15,31 @@ namespace
 constexpr int kNormalTableBits = 16;
 constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
 constexpr int kBucket = 8;  // vacated cells are bucketed in squares of kBucket x kBucket cells
+// Motion evidence (doc/grid_filter.md, "Motion evidence").
+constexpr float kClearlyFree = 0.25F;           // p_o at or below which a cell is seen clearly free
+constexpr float kBelievedOccupied = 0.6F;       // P(S) + P(D) of a cell believed occupied
+constexpr float kBelievedFree = 0.6F;           // P(E) of a cell believed free
+constexpr float kEvidenceGate = 0.3F;           // evidence from which a cell counts as moving
+constexpr float kSignificantMotion = 9.0F;      // m^2 of a propagation source (3 standard deviations)
+constexpr float kMinVelocityVariance = 0.01F;   // [m^2/s^2] floor of var_x, var_y in m^2
+constexpr float kInheritVarianceFloor = 0.25F;  // [m^2/s^2] floor of an inherited velocity variance
+constexpr std::uint16_t kAgesNever = 0xFFFF;    // both ages saturated: never (or not for 255 scans)
+
+// Significance of a mean velocity: vx^2 / var_x + vy^2 / var_y (variances floored).
+inline float velocitySignificance(float vx, float vy, float var_x, float var_y)
+{
+  return vx * vx / std::max(var_x, kMinVelocityVariance) + vy * vy / std::max(var_y, kMinVelocityVariance);
+}
+
+// Probability of an event of probability `per_period` within transition_period, over dt.
+float perInterval(double per_period, double dt, double period)
+{
+  if (per_period <= 0.0 || dt <= 0.0)
+  {
+    return 0.0F;
+  }
+  return static_cast<float>(1.0 - std::pow(1.0 - per_period, dt / period));
+}
 
 // Standard normal quantiles at the centres of 2^16 equal-probability slices: a 16-bit random
 // index gives a normal sample (tails cut at +-4.3 sigma), a deterministic and fast sampler.
@@ -141,6 +166,18 @@ void DynamicGridConfig::validate() const
   require(
       std::isfinite(birth_motion_fraction) && birth_motion_fraction >= 0.0 && birth_motion_fraction <= 1.0,
       "birth_motion_fraction", "must be in [0, 1]");
+  require(std::isfinite(motion_window) && motion_window >= 0.0 && motion_window <= 25.0, "motion_window",
+          "must be in [0, 25] [s]");
+  require(std::isfinite(motion_radius) && motion_radius >= 0.0 && motion_radius <= 20.0, "motion_radius",
+          "must be in [0, 20] [m]");
+  require(std::isfinite(motion_memory) && motion_memory > 0.0, "motion_memory", "must be > 0 [s]");
+  require(std::isfinite(unknown_to_dynamic_by_motion) && unknown_to_dynamic_by_motion >= 0.0 &&
+              unknown_to_dynamic_by_motion <= 1.0,
+          "unknown_to_dynamic_by_motion", "must be in [0, 1]");
+  requireProbability(static_to_dynamic_by_motion, "static_to_dynamic_by_motion");
+  requireProbability(propagation_rate, "propagation_rate");
+  require(std::isfinite(propagation_length) && propagation_length > 0.0 && propagation_length <= 100.0,
+          "propagation_length", "must be in (0, 100] [m]");
   require(dynamic_threshold > 0.0 && dynamic_threshold <= 1.0, "dynamic_threshold", "must be in (0, 1]");
   require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0, "min_dynamic_speed",
           "must be >= 0 [m/s]");
@@ -167,8 +204,30 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   geometry_.height = config_.height;
   geometry_.resolution = config_.resolution;
   const std::size_t cells = geometry_.cellCount();
-  for (auto* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_, &newborn_,
-                  &persistent_factor_, &stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
+  for (auto* v : {&pred_dynamic_,
+                  &from_dynamic_static_,
+                  &from_dynamic_unknown_,
+                  &newborn_,
+                  &persistent_factor_,
+                  &stat_w_,
+                  &stat_vx_,
+                  &stat_vy_,
+                  &stat_vxx_,
+                  &stat_vyy_,
+                  &vacated_share_,
+                  &start_share_,
+                  &propagated_share_,
+                  &left_vx_,
+                  &left_vy_,
+                  &left_var_x_,
+                  &left_var_y_,
+                  &source_vx_,
+                  &source_vy_,
+                  &source_var_x_,
+                  &source_var_y_,
+                  &source_weight_,
+                  &motion_evidence_,
+                  &evidence_scratch_})
   {
     v->resize(cells);
   }
@@ -183,6 +242,10 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   }
   occupied_mask_.assign(cells, 0);
   previous_mask_.assign(cells, 0);
+  ages_.assign(cells, kAgesNever);
+  age_scratch_.assign(cells, kAgesNever);
+  vacated_count_.assign(
+      static_cast<std::size_t>(geometry_.width + 1) * static_cast<std::size_t>(geometry_.height + 1), 0);
   bucket_cols_ = (geometry_.width + kBucket - 1) / kBucket;
   bucket_rows_ = (geometry_.height + kBucket - 1) / kBucket;
   bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1,
@@ -200,6 +263,8 @@ void DynamicGridFilter::reset()
   occupancy_.assign(geometry_.cellCount(), 0.5F);
   std::fill(occupied_mask_.begin(), occupied_mask_.end(), 0);
   std::fill(previous_mask_.begin(), previous_mask_.end(), 0);
+  std::fill(ages_.begin(), ages_.end(), kAgesNever);
+  std::fill(motion_evidence_.begin(), motion_evidence_.end(), 0.0F);
   vacated_.clear();
   have_previous_ = false;
   rng_.seed(config_.seed);
@@ -322,21 +387,41 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var);
     geometry_.origin_col = col;
     geometry_.origin_row = row;
-    // The occupied mask of the last scan, moved like the cells: the previous scan's mask.
+    // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the
+    // ages and the motion evidence move with the cells too (cells entering the grid: never seen).
     const int w = geometry_.width;
     const int h = geometry_.height;
-    for (int r = 0; r < h; ++r)
+    if (cycle.shift_cols == 0 && cycle.shift_rows == 0)
     {
-      const std::int64_t src_r = r + cycle.shift_rows;
-      for (int c = 0; c < w; ++c)
+      previous_mask_ = occupied_mask_;
+    }
+    else
+    {
+      for (int r = 0; r < h; ++r)
       {
-        const std::int64_t src_c = c + cycle.shift_cols;
-        previous_mask_[geometry_.index(r, c)] =
-            (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
-                ? occupied_mask_[static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
-                                 static_cast<std::size_t>(src_c)]
-                : 0;
+        const std::int64_t src_r = r + cycle.shift_rows;
+        for (int c = 0; c < w; ++c)
+        {
+          const std::int64_t src_c = c + cycle.shift_cols;
+          const std::size_t dst = geometry_.index(r, c);
+          if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+          {
+            const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                    static_cast<std::size_t>(src_c);
+            previous_mask_[dst] = occupied_mask_[src];
+            age_scratch_[dst] = ages_[src];
+            evidence_scratch_[dst] = motion_evidence_[src];
+          }
+          else
+          {
+            previous_mask_[dst] = 0;
+            age_scratch_[dst] = kAgesNever;
+            evidence_scratch_[dst] = 0.0F;
+          }
+        }
       }
+      std::swap(ages_, age_scratch_);
+      std::swap(motion_evidence_, evidence_scratch_);
     }
     const float sx = static_cast<float>(static_cast<double>(cycle.shift_cols) * geometry_.resolution);
     const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
@@ -364,7 +449,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     occupancy_.assign(geometry_.cellCount(), 0.5F);
   }
   const Clock::time_point t_model_end = Clock::now();
-  findMotionCells(first);
+  findMotionCells(first, static_cast<float>(dt));
 
   // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
   // scan has no motion; its transitions use one transition_period so that it counts.
@@ -394,30 +479,67 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
   const float inv_information = 1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5,
                                                                    0.5 - config_.sensor_model.p_free));
+  const bool evidence = config_.motion_window > 0.0;
+  const auto u_to_d = static_cast<float>(config_.unknown_to_dynamic_by_motion);
+  const float start =
+      perInterval(config_.static_to_dynamic_by_motion, dt_transition, config_.transition_period);
   for (std::size_t c = 0; c < cells; ++c)
   {
     const float s = cells_.p_static[c];
     const float e = cells_.p_free[c];
     const float u = cells_.p_unknown[c];
     const float po = occupancy_[c];
+    const float mu = evidence ? motion_evidence_[c] : 0.0F;
     // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
     // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
     // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
     // instead of drifting to a stale static/free prior while it is shadowed).
     const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
-    const float u_s = lambda * ru.to[0];
-    const float u_d = lambda * ru.to[1];
+    // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
+    // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
+    // a cell measured occupied start moving (a static object does not leave a cell in view).
+    const float u_s = lambda * ru.to[0] * (1.0F - u_to_d * mu);
+    const float u_d = lambda * (ru.to[1] + ru.to[0] * u_to_d * mu);
     const float u_e = lambda * ru.to[2];
-    const float s_pred = s * rs.stay + e * re.to[0] + u * u_s + from_dynamic_static_[c];
+    const float s_start = po > 0.5F ? std::min(start * mu, rs.stay) : 0.0F;
+    const float s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_dynamic_static_[c];
     const float d_persistent = pred_dynamic_[c];
-    const float d_newborn = s * rs.to[0] + e * re.to[1] + u * u_d;
+    const float d_started = s * s_start;
+    float d_newborn = s * rs.to[0] + d_started + e * re.to[1] + u * u_d;
     const float e_pred = e * re.stay + u * u_e;
     float u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
     const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
+    float d_vacated = 0.0F;
     if (total < 1.0F)
     {
-      u_pred += 1.0F - total;  // mass that moved out of the cell with its particles: unknown now
+      // The mass that moved out of the cell with its particles. vacated_to_dynamic: in an observed
+      // cell the share q = D / (S + D) (1 - exp(-m^2/2)) -- how much the occupant was believed to
+      // move, times the significance m^2 of the velocity that left -- is the next part of the
+      // moving object (newborn dynamic mass with that velocity), the rest of the observed part is
+      // left to the measurement (renormalised away); unobserved, it becomes unknown.
+      const float hole = 1.0F - total;
+      if (config_.vacated_to_dynamic)
+      {
+        const float m2 =
+            velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
+        const float occupied = s + cells_.p_dynamic[c];
+        const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
+        d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+        d_newborn += d_vacated;
+        u_pred += (1.0F - lambda) * hole;
+        left_vx_[c] = cells_.vx[c];
+        left_vy_[c] = cells_.vy[c];
+        left_var_x_[c] = cells_.v_var_x[c];
+        left_var_y_[c] = cells_.v_var_y[c];
+      }
+      else
+      {
+        u_pred += hole;  // unknown now
+      }
     }
+    vacated_share_[c] = d_newborn > 0.0F ? d_vacated / d_newborn : 0.0F;
+    start_share_[c] = d_newborn > 0.0F ? d_started / d_newborn : 0.0F;
+    propagated_share_[c] = 0.0F;
     const float ls = po * s_pred;
     const float ldp = po * d_persistent;
     const float ldn = po * d_newborn;
@@ -480,6 +602,12 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     }
   }
 
+  // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
+  if (evidence && config_.propagation_rate > 0.0)
+  {
+    propagateMotion(static_cast<float>(dt_transition));
+  }
+
   // 8-9. Birth in proportion to the newborn mass, resampling.
   cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
   const Clock::time_point t_end = Clock::now();
@@ -488,17 +616,37 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   return cycle;
 }
 
-void DynamicGridFilter::findMotionCells(bool first)
+void DynamicGridFilter::findMotionCells(bool first, float dt)
 {
-  // Appearing cell: measured occupied now (p_o > 1/2), not in the previous scan. Vacated cell:
-  // measured occupied in the previous scan, measured free now (p_o < 1/2): what occupied it has
-  // moved (a static object does not leave a cell that stays in view). Vacated cells are bucketed
-  // (counting sort) for the search of motionVelocity().
+  // Vacated cell: what occupied it has moved (a static object does not leave a cell that stays
+  // in view). Appearing cell (motion-driven birth): measured occupied now, not in the previous
+  // scan. With motion_window = 0 (the previous definitions): occupied p_o > 1/2 in the previous
+  // scan, free p_o < 1/2 now. With a window of W scans: held obstacle points within the last W
+  // scans, clearly free now (p_o <= 1/4) and believed occupied (P(S) + P(D) >= 0.6); the cells
+  // that hold obstacle points are the occupied mask. Vacated cells are bucketed (counting sort)
+  // for the search of motionVelocity().
   const std::size_t cells = geometry_.cellCount();
-  const bool use =
+  const bool evidence = config_.motion_window > 0.0;
+  const int window =
+      evidence
+          ? std::max(1, static_cast<int>(std::ceil(config_.motion_window / config_.transition_period - 1e-9)))
+          : 0;
+  const auto p_hit = static_cast<float>(config_.sensor_model.p_occupied);
+  const bool birth =
       !first && have_previous_ && config_.birth_motion_speed > 0.0 && config_.birth_motion_fraction > 0.0;
   vacated_.clear();
-  if (use)
+  if (evidence && !first)
+  {
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      if ((ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
+          cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied)
+      {
+        vacated_.push_back(static_cast<std::int32_t>(c));
+      }
+    }
+  }
+  else if (birth)
   {
     for (std::size_t c = 0; c < cells; ++c)
     {
@@ -530,11 +678,238 @@ void DynamicGridFilter::findMotionCells(bool first)
     bucket_cells_[static_cast<std::size_t>(candidates_[bucketOf(c)]++)] = c;
   }
   candidates_.clear();
-  for (std::size_t c = 0; c < cells; ++c)
+
+  if (evidence)
   {
-    occupied_mask_[c] = occupancy_[c] > 0.5F ? 1 : 0;
+    // Motion evidence: 1 in a cell that appeared (holds obstacle points now, was seen clearly
+    // free within the window and believed free) or lies within motion_radius of a vacated cell
+    // (box count on a summed-area table); otherwise the previous evidence decayed by
+    // exp(-dt / motion_memory).
+    const int gw = geometry_.width;
+    const int gh = geometry_.height;
+    const auto stride = static_cast<std::size_t>(gw + 1);
+    std::fill(vacated_count_.begin(), vacated_count_.end(), 0);
+    for (std::int32_t c : vacated_)
+    {
+      vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] =
+          1;
+    }
+    // An isolated vacated cell (no other one among its 8 neighbours) is no evidence: what moves
+    // leaves an edge of cells, while sampling artefacts (a sector that misses a surface for one
+    // scan) leave single cells.
+    isolated_.clear();
+    for (std::int32_t c : vacated_)
+    {
+      const int r = c / gw + 1;
+      const int col = c % gw + 1;
+      int neighbours = 0;
+      for (int dr = -1; dr <= 1; ++dr)
+      {
+        for (int dc = -1; dc <= 1; ++dc)
+        {
+          const int rr = r + dr;
+          const int cc = col + dc;
+          if ((dr != 0 || dc != 0) && rr >= 1 && cc >= 1 && rr <= gh && cc <= gw)
+          {
+            neighbours +=
+                vacated_count_[static_cast<std::size_t>(rr) * stride + static_cast<std::size_t>(cc)];
+          }
+        }
+      }
+      if (neighbours == 0)
+      {
+        isolated_.push_back(static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col));
+      }
+    }
+    for (std::size_t i : isolated_)
+    {
+      vacated_count_[i] = 0;
+    }
+    const bool any_vacated = isolated_.size() < vacated_.size();
+    for (int r = 1; r <= gh; ++r)
+    {
+      std::int32_t row_sum = 0;
+      for (int col = 1; col <= gw; ++col)
+      {
+        const std::size_t i = static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col);
+        row_sum += vacated_count_[i];
+        vacated_count_[i] = row_sum + vacated_count_[i - stride];
+      }
+    }
+    const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
+    // An appearing surface that was hit next door in the previous scan has not moved there: a
+    // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
+    auto previousHitNear = [&](int r, int col)
+    {
+      for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1); ++rr)
+      {
+        for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1); ++cc)
+        {
+          if (previous_mask_[geometry_.index(rr, cc)])
+          {
+            return true;
+          }
+        }
+      }
+      return false;
+    };
+    const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
+    auto count = [&](int r, int col)
+    { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
+    for (int r = 0; r < gh; ++r)
+    {
+      const int r0 = std::max(0, r - radius);
+      const int r1 = std::min(gh, r + radius + 1);
+      for (int col = 0; col < gw; ++col)
+      {
+        const std::size_t c = geometry_.index(r, col);
+        float e = decay * motion_evidence_[c];
+        if (any_vacated)
+        {
+          const int c0 = std::max(0, col - radius);
+          const int c1 = std::min(gw, col + radius + 1);
+          if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
+          {
+            e = 1.0F;
+          }
+        }
+        motion_evidence_[c] = e;
+      }
+    }
+    // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
+    auto appeared = [&](int r, int col)
+    {
+      const std::size_t c = geometry_.index(r, col);
+      return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
+             !previousHitNear(r, col);
+    };
+    for (int r = 0; r < gh; ++r)
+    {
+      for (int col = 0; col < gw; ++col)
+      {
+        const std::size_t c = geometry_.index(r, col);
+        if (occupancy_[c] < p_hit || !appeared(r, col))
+        {
+          continue;
+        }
+        bool edge = false;
+        for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
+        {
+          for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
+          {
+            edge = (rr != r || cc != col) && appeared(rr, cc);
+          }
+        }
+        if (edge)
+        {
+          motion_evidence_[c] = 1.0F;
+        }
+      }
+    }
+    // Ages: scans since the cell last held obstacle points / was seen clearly free.
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      const int hit_age = occupancy_[c] >= p_hit ? 0 : std::min((ages_[c] & 0xFF) + 1, 255);
+      const int free_age = occupancy_[c] <= kClearlyFree ? 0 : std::min((ages_[c] >> 8) + 1, 255);
+      ages_[c] = static_cast<std::uint16_t>(hit_age | (free_age << 8));
+      occupied_mask_[c] = occupancy_[c] >= p_hit ? 1 : 0;
+    }
+  }
+  else
+  {
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      occupied_mask_[c] = occupancy_[c] > 0.5F ? 1 : 0;
+    }
   }
   have_previous_ = true;
+}
+
+void DynamicGridFilter::propagateMotion(float dt)
+{
+  // Sources: measured occupied, P(D) >= 1/2, velocity significance >= 9, motion evidence. Along
+  // the source's velocity line, both ways, through occupied cells (P(S) + P(D) >= 1/2; one gap
+  // cell allowed), each cell records the strongest source (its P(D)) and its velocity; then the
+  // static mass of every such cell measured occupied becomes newborn dynamic mass at the rate
+  // propagation_rate (per transition_period) times the source's P(D).
+  const std::size_t cells = geometry_.cellCount();
+  std::fill(source_weight_.begin(), source_weight_.end(), 0.0F);
+  const int w = geometry_.width;
+  const int h = geometry_.height;
+  const int steps = static_cast<int>(std::ceil(config_.propagation_length / geometry_.resolution));
+  bool any = false;
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    const float weight = cells_.p_dynamic[c];
+    if (occupancy_[c] <= 0.5F || weight < 0.5F || motion_evidence_[c] < kEvidenceGate)
+    {
+      continue;
+    }
+    const float vx = cells_.vx[c];
+    const float vy = cells_.vy[c];
+    if (velocitySignificance(vx, vy, cells_.v_var_x[c], cells_.v_var_y[c]) < kSignificantMotion)
+    {
+      continue;
+    }
+    const float big = std::max(std::fabs(vx), std::fabs(vy));
+    const float sx = vx / big;
+    const float sy = vy / big;
+    const int row0 = static_cast<int>(c / static_cast<std::size_t>(w));
+    const int col0 = static_cast<int>(c % static_cast<std::size_t>(w));
+    for (const float dir : {-1.0F, 1.0F})
+    {
+      int gaps = 0;
+      for (int k = 1; k <= steps; ++k)
+      {
+        const int col = col0 + static_cast<int>(std::lround(dir * sx * static_cast<float>(k)));
+        const int row = row0 + static_cast<int>(std::lround(dir * sy * static_cast<float>(k)));
+        if (col < 0 || row < 0 || col >= w || row >= h)
+        {
+          break;
+        }
+        const std::size_t i = geometry_.index(row, col);
+        if (cells_.p_static[i] + cells_.p_dynamic[i] < 0.5F)
+        {
+          if (++gaps > 1)
+          {
+            break;
+          }
+          continue;
+        }
+        gaps = 0;
+        if (weight > source_weight_[i])
+        {
+          source_weight_[i] = weight;
+          source_vx_[i] = vx;
+          source_vy_[i] = vy;
+          source_var_x_[i] = cells_.v_var_x[c];
+          source_var_y_[i] = cells_.v_var_y[c];
+          any = true;
+        }
+      }
+    }
+  }
+  if (!any)
+  {
+    return;
+  }
+  const float rate = perInterval(config_.propagation_rate, dt, config_.transition_period);
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    if (source_weight_[c] <= 0.0F || occupancy_[c] <= 0.5F)
+    {
+      continue;
+    }
+    const float moved = rate * source_weight_[c] * cells_.p_static[c];
+    const float before = newborn_[c];
+    cells_.p_static[c] -= moved;
+    cells_.p_dynamic[c] += moved;
+    newborn_[c] = before + moved;
+    const float keep = before / newborn_[c];
+    vacated_share_[c] *= keep;
+    start_share_[c] *= keep;
+    propagated_share_[c] = moved / newborn_[c];
+  }
 }
 
 bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy)
@@ -631,12 +1006,44 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
       const float sb = static_cast<float>(config_.birth_velocity_sigma);
       const bool appearing = !vacated_.empty() && !previous_mask_[c];
       const auto fraction = static_cast<float>(config_.birth_motion_fraction);
+      // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity),
+      // vacated (the velocity that left the cell), started (a motion-driven velocity); the rest
+      // takes the cell's velocity estimate where it has persistent particles and motion evidence
+      // (inherit_birth_velocity), a motion-driven velocity in an appearing cell
+      // (birth_motion_fraction), else a random one.
+      const float to_propagated = propagated_share_[c];
+      const float to_vacated = to_propagated + vacated_share_[c];
+      const float to_started = to_vacated + start_share_[c];
+      const bool inherit =
+          config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
       for (std::size_t k = first; k < born; ++k)
       {
         birth_x_[k] = (static_cast<float>(col) + uniform()) * res;
         birth_y_[k] = (static_cast<float>(row) + uniform()) * res;
-        if (!(appearing && uniform() < fraction &&
-              motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k])))
+        const float origin = to_started > 0.0F ? uniform() : 1.0F;
+        if (origin < to_propagated)
+        {
+          birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normal();
+          birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normal();
+        }
+        else if (origin < to_vacated)
+        {
+          birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normal();
+          birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normal();
+        }
+        else if (origin < to_started &&
+                 motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k]))
+        {
+        }
+        else if (inherit)
+        {
+          birth_vx_[k] =
+              cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) * normal();
+          birth_vy_[k] =
+              cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) * normal();
+        }
+        else if (!(appearing && uniform() < fraction &&
+                   motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k])))
         {
           birth_vx_[k] = sb * normal();
           birth_vy_[k] = sb * normal();

@@ -240,6 +240,38 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
     }
   }
 
+  // Cells next to a hit are never free (hit_neighbours_not_free): a 3x3 dilation of the hits,
+  // as a horizontal then a vertical pass.
+  if (config_.hit_neighbours_not_free)
+  {
+    const int w = grid.width;
+    const int h = grid.height;
+    near_hit_.assign(grid.cellCount(), 0);
+    for (int row = 0; row < h; ++row)
+    {
+      const std::uint8_t* in = cell_hit_.data() + grid.index(row, 0);
+      std::uint8_t* out = near_hit_.data() + grid.index(row, 0);
+      for (int col = 0; col < w; ++col)
+      {
+        out[col] = static_cast<std::uint8_t>(in[col] | (col > 0 ? in[col - 1] : 0) |
+                                             (col + 1 < w ? in[col + 1] : 0));
+      }
+    }
+    for (int col = 0; col < w; ++col)
+    {
+      std::uint8_t above = 0;
+      for (int row = 0; row < h; ++row)
+      {
+        const std::size_t idx = grid.index(row, col);
+        const std::uint8_t here = near_hit_[idx];
+        const std::uint8_t below = row + 1 < h ? near_hit_[idx + static_cast<std::size_t>(w)] : 0;
+        near_hit_[idx] = static_cast<std::uint8_t>(here | above | below);
+        above = here;
+      }
+    }
+  }
+  const bool protect = config_.hit_neighbours_not_free;
+
   // Polar ray casting per cell centre (the "lookup" of a cell is its sector and range from
   // the sensor, computed with the same fastAtan2 as the points):
   //   hit range h, sigma s, g(d) = exp(-d^2 / (2 s^2)) (0 beyond 3 s):
@@ -285,6 +317,10 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
       else if (r <= farthest_return_[sector])
       {
         occupancy[idx] = p_fr;
+      }
+      if (protect && near_hit_[idx] && occupancy[idx] < 0.5F)
+      {
+        occupancy[idx] = 0.5F;
       }
     }
   }

@@ -1,5 +1,6 @@
 #include "grid_vision_fusion/projection/grid_projection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -69,12 +70,41 @@ void GridProjectionConfig::validate() const
           "occupied_threshold must be in (0, 1], got " + std::to_string(occupied_threshold));
   require(dynamic_ratio >= 0.0 && dynamic_ratio < 1.0,
           "dynamic_ratio must be in [0, 1), got " + std::to_string(dynamic_ratio));
+  require(std::isfinite(min_dynamic_speed) && min_dynamic_speed >= 0.0,
+          "min_dynamic_speed must be finite and >= 0 m/s, got " + std::to_string(min_dynamic_speed));
+  require(std::isfinite(mahalanobis_threshold) && mahalanobis_threshold >= 0.0,
+          "mahalanobis_threshold must be finite and >= 0, got " + std::to_string(mahalanobis_threshold));
   require(std::isfinite(min_depth) && min_depth > 0.0,
           "min_depth must be finite and > 0 m, got " + std::to_string(min_depth));
   require(std::isfinite(column_height) && column_height > 0.0,
           "column_height must be finite and > 0 m, got " + std::to_string(column_height));
   require(column_points >= 2 && column_points <= 100,
           "column_points must be in [2, 100], got " + std::to_string(column_points));
+}
+
+CellState cellState(float p_static, float p_dynamic, float vx, float vy, float var_x, float var_y,
+                    const GridProjectionConfig& config)
+{
+  if (cellState(p_static, p_dynamic, config) != CellState::kDynamic)
+  {
+    return CellState::kStatic;
+  }
+  const double speed2 = static_cast<double>(vx) * vx + static_cast<double>(vy) * vy;
+  if (!(speed2 >= config.min_dynamic_speed * config.min_dynamic_speed))
+  {
+    return CellState::kStatic;
+  }
+  if (config.mahalanobis_threshold > 0.0 && var_x >= 0.0F && var_y >= 0.0F)
+  {
+    constexpr double kMinVariance = 1e-6;  // [m²/s²]: a particle cloud collapsed onto one velocity
+    const double m2 = static_cast<double>(vx) * vx / std::max<double>(var_x, kMinVariance) +
+                      static_cast<double>(vy) * vy / std::max<double>(var_y, kMinVariance);
+    if (!(m2 >= config.mahalanobis_threshold))
+    {
+      return CellState::kStatic;
+    }
+  }
+  return CellState::kDynamic;
 }
 
 void ProjectedCells::reserve(std::size_t points)
@@ -138,9 +168,17 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
         continue;
       }
       ++out.cells_selected;
-      const CellState state = cellState(ps, pd, config);
       float cvx = grid.vx[i];
       float cvy = grid.vy[i];
+      // A cell dynamic by its masses needs a finite velocity (else it is invalid, below); then the
+      // velocity test may still make it static.
+      CellState state = cellState(ps, pd, config);
+      if (state == CellState::kDynamic && std::isfinite(cvx) && std::isfinite(cvy))
+      {
+        const bool variances = grid.v_var_x != nullptr && grid.v_var_y != nullptr;
+        state = cellState(ps, pd, cvx, cvy, variances ? grid.v_var_x[i] : -1.0F,
+                          variances ? grid.v_var_y[i] : -1.0F, config);
+      }
       double x = grid.origin_x + (col + 0.5) * grid.resolution;
       double y = cell_y;
       if (state == CellState::kDynamic)

@@ -63,6 +63,13 @@ GridCellsView gridCellsViewOf(const DynamicGrid& msg)
   view.p_dynamic = msg.p_dynamic.data();
   view.vx = msg.vx.data();
   view.vy = msg.vy.data();
+  // The variances are optional (the Mahalanobis test of the projection is skipped without them).
+  const std::size_t cells = view.size();
+  if (msg.v_var_x.size() == cells && msg.v_var_y.size() == cells)
+  {
+    view.v_var_x = msg.v_var_x.data();
+    view.v_var_y = msg.v_var_y.data();
+  }
   return view;
 }
 

@@ -57,6 +57,71 @@ TEST(FastAtan2, MatchesStdAtan2)
   EXPECT_EQ(fastAtan2(0.0F, 0.0F), 0.0F);
 }
 
+// Cells seen free (p_o < 1/2) that have a cell holding obstacle points (p_o = p_occupied) in
+// their 8-neighbourhood.
+std::size_t freeNextToHits(const std::vector<float>& occ, const GridGeometry& g, float p_occ)
+{
+  std::size_t n = 0;
+  for (int row = 1; row + 1 < g.height; ++row)
+  {
+    for (int col = 1; col + 1 < g.width; ++col)
+    {
+      if (occ[g.index(row, col)] >= 0.5F)
+      {
+        continue;
+      }
+      bool near = false;
+      for (int dr = -1; dr <= 1; ++dr)
+      {
+        for (int dc = -1; dc <= 1; ++dc)
+        {
+          near = near || occ[g.index(row + dr, col + dc)] >= p_occ;
+        }
+      }
+      n += near ? 1 : 0;
+    }
+  }
+  return n;
+}
+
+TEST(InverseSensorModel, HitNeighboursAreNeverFree)
+{
+  // A wall along the road seen at a grazing angle: a polar sector's nearest hit can lie beyond
+  // the part of the wall that crosses the sector, and without the rule cells of the wall next
+  // to its hits are "seen free" (and flicker between hit and free from scan to scan, which the
+  // filter would read as motion).
+  const GridGeometry g = testGrid();
+  BoxWorldLidarConfig lidar_config;
+  lidar_config.range_noise_sigma = 0.02;
+  BoxWorldLidar lidar(lidar_config);
+  const auto pose = sensorPose(0.0, 0.0, 1.73);
+  Box wall;
+  wall.x = 25.0;
+  wall.y = -3.05;
+  wall.length = 30.0;
+  wall.width = 0.3;
+  wall.height = 2.0;
+  const std::vector<float> xyz = lidar.scan(pose, {wall});
+  InverseSensorModelConfig config;
+  const auto p_occ = static_cast<float>(config.p_occupied);
+  config.hit_neighbours_not_free = false;
+  InverseSensorModel previous(config);
+  std::vector<float> before;
+  previous.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, before);
+  EXPECT_GT(freeNextToHits(before, g, p_occ), 0U) << "the scene does not show the grazing-angle case";
+  config.hit_neighbours_not_free = true;
+  InverseSensorModel model(config);
+  std::vector<float> after;
+  model.compute(PointCloudView::packedXyz(xyz.data(), xyz.size() / 3), pose, g, after);
+  EXPECT_EQ(freeNextToHits(after, g, p_occ), 0U);
+  // Nothing else changes: the road between the sensor and the wall is still free.
+  for (double x : {6.0, 12.0, 20.0})
+  {
+    EXPECT_LT(at(after, g, x, -1.0), 0.5F) << x;
+    EXPECT_FLOAT_EQ(at(after, g, x, -1.0), at(before, g, x, -1.0)) << x;
+  }
+}
+
 TEST(InverseSensorModel, FreeBeforeTheBoxOccupiedAtItUnknownBehind)
 {
   const GridGeometry g = testGrid();

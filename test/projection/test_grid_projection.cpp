@@ -5,6 +5,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -266,6 +267,7 @@ TEST(GridProjection, SelectsCellsByThresholdAndDecidesTheirState)
   grid.set(10.1, 2.1, 0.45F, 0.45F);   // tie: static
   grid.set(10.1, 4.1, 0.60F, 0.30F);   // static at ratio 0.5, dynamic at ratio 0.3
   GridProjectionConfig config;
+  config.min_dynamic_speed = 0.0;  // the masses alone (these cells have no velocity)
   ProjectedCells cells = projectGrid(grid.view(), kitti.camera, kitti.geometry, config);
   ASSERT_EQ(cells.size(), 4U);
   EXPECT_EQ(cells.cells_selected, 4U);
@@ -282,6 +284,43 @@ TEST(GridProjection, SelectsCellsByThresholdAndDecidesTheirState)
   config.occupied_threshold = 0.5;
   cells = projectGrid(grid.view(), kitti.camera, kitti.geometry, config);
   EXPECT_EQ(cells.size(), 2U);  // (0.3, 0.5) and (0.6, 0.3)
+}
+
+TEST(GridProjection, VelocityTestMakesSlowOrUncertainDynamicCellsStatic)
+{
+  // A stopped object keeps dynamic mass while its particles slow down: with min_dynamic_speed a
+  // DYNAMIC cell (by its masses) needs a mean velocity of at least that speed, and with
+  // mahalanobis_threshold a velocity that many variances away from zero.
+  const KittiSetup kitti;
+  TestGrid grid = veloGrid();
+  grid.set(10.1, -2.1, 0.10F, 0.80F, 5.0F, 0.0F);  // fast
+  grid.set(10.1, 0.1, 0.10F, 0.80F, 0.6F, 0.0F);   // slower than 1 m/s
+  grid.set(10.1, 2.1, 0.60F, 0.30F, 5.0F, 0.0F);   // fast, but static by its masses
+  std::vector<float> var_x(grid.vx.size(), 1.0F);
+  std::vector<float> var_y(grid.vx.size(), 1.0F);
+  GridCellsView view = grid.view();
+  const auto s = static_cast<std::uint8_t>(CellState::kStatic);
+  const auto d = static_cast<std::uint8_t>(CellState::kDynamic);
+  GridProjectionConfig config;
+  EXPECT_DOUBLE_EQ(config.min_dynamic_speed, 1.0);
+  EXPECT_EQ(projectGrid(view, kitti.camera, kitti.geometry, config).state,
+            (std::vector<std::uint8_t>{d, s, s}));
+  config.min_dynamic_speed = 0.0;  // the paper's rule: the masses alone
+  EXPECT_EQ(projectGrid(view, kitti.camera, kitti.geometry, config).state,
+            (std::vector<std::uint8_t>{d, d, s}));
+  // Mahalanobis: 5^2 / 1 = 25 passes 16, 5^2 / 4 does not; without variances it is skipped.
+  config.mahalanobis_threshold = 16.0;
+  EXPECT_EQ(projectGrid(view, kitti.camera, kitti.geometry, config).state,
+            (std::vector<std::uint8_t>{d, d, s}));
+  view.v_var_x = var_x.data();
+  view.v_var_y = var_y.data();
+  EXPECT_EQ(projectGrid(view, kitti.camera, kitti.geometry, config).state,
+            (std::vector<std::uint8_t>{d, s, s}));
+  std::fill(var_x.begin(), var_x.end(), 4.0F);
+  EXPECT_EQ(projectGrid(view, kitti.camera, kitti.geometry, config).state,
+            (std::vector<std::uint8_t>{s, s, s}));
+  EXPECT_EQ(cellState(0.1F, 0.8F, 5.0F, 0.0F, -1.0F, -1.0F, config), CellState::kDynamic);
+  EXPECT_EQ(cellState(0.1F, 0.8F, 5.0F, 0.0F, 4.0F, 4.0F, config), CellState::kStatic);
 }
 
 TEST(GridProjection, InvalidCellsAreCountedNotProjected)
@@ -340,6 +379,12 @@ TEST(GridProjection, RejectsBadInputsNamingThem)
   config = GridProjectionConfig{};
   config.dynamic_ratio = 1.0;
   expectField(config, "dynamic_ratio");
+  config = GridProjectionConfig{};
+  config.min_dynamic_speed = -1.0;
+  expectField(config, "min_dynamic_speed");
+  config = GridProjectionConfig{};
+  config.mahalanobis_threshold = std::nan("");
+  expectField(config, "mahalanobis_threshold");
   config = GridProjectionConfig{};
   config.min_depth = std::nan("");
   expectField(config, "min_depth");

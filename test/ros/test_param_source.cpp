@@ -136,6 +136,29 @@ TEST(YamlParamSource, ThePackageConfigFilesGiveTheConfigsTheyDocument)
   EXPECT_EQ(g.particle_count, 131072);
   EXPECT_EQ(g.seed, 42U);
   EXPECT_DOUBLE_EQ(g.resolution, 0.2);
+  // The motion-evidence keys document the core defaults.
+  const DynamicGridConfig defaults;
+  EXPECT_EQ(g.vacated_to_dynamic, defaults.vacated_to_dynamic);
+  EXPECT_DOUBLE_EQ(g.motion_window, defaults.motion_window);
+  EXPECT_DOUBLE_EQ(g.motion_radius, defaults.motion_radius);
+  EXPECT_DOUBLE_EQ(g.motion_memory, defaults.motion_memory);
+  EXPECT_DOUBLE_EQ(g.unknown_to_dynamic_by_motion, defaults.unknown_to_dynamic_by_motion);
+  EXPECT_DOUBLE_EQ(g.static_to_dynamic_by_motion, defaults.static_to_dynamic_by_motion);
+  EXPECT_EQ(g.inherit_birth_velocity, defaults.inherit_birth_velocity);
+  EXPECT_DOUBLE_EQ(g.propagation_rate, defaults.propagation_rate);
+  EXPECT_DOUBLE_EQ(g.propagation_length, defaults.propagation_length);
+  EXPECT_EQ(g.sensor_model.hit_neighbours_not_free, defaults.sensor_model.hit_neighbours_not_free);
+  const YamlParamSource previous = YamlParamSource::fromString(
+      "vacated_to_dynamic: false\nmotion_window: 0\npropagation_rate: 0.1\ninherit_birth_velocity: false\n"
+      "hit_neighbours_not_free: false\nstatic_to_dynamic_by_motion: 0.05\n",
+      "previous.yaml");
+  const DynamicGridConfig p = DynamicGridParams::fromParams(previous).filter;
+  EXPECT_FALSE(p.vacated_to_dynamic);
+  EXPECT_DOUBLE_EQ(p.motion_window, 0.0);
+  EXPECT_DOUBLE_EQ(p.propagation_rate, 0.1);
+  EXPECT_FALSE(p.inherit_birth_velocity);
+  EXPECT_FALSE(p.sensor_model.hit_neighbours_not_free);
+  EXPECT_DOUBLE_EQ(p.static_to_dynamic_by_motion, 0.05);
   const DynamicGridParams gn = DynamicGridParams::fromParams(grid);
   EXPECT_EQ(gn.fixed_frame, "world");
 
@@ -148,6 +171,10 @@ TEST(YamlParamSource, ThePackageConfigFilesGiveTheConfigsTheyDocument)
 
   const YamlParamSource projection = YamlParamSource::fromFile(kConfigDir + "/grid_projection.yaml");
   EXPECT_DOUBLE_EQ(GridProjectionParams::fromParams(projection).projection.occupied_threshold, 0.4);
+  EXPECT_DOUBLE_EQ(GridProjectionParams::fromParams(projection).projection.min_dynamic_speed,
+                   GridProjectionConfig{}.min_dynamic_speed);
+  EXPECT_DOUBLE_EQ(GridProjectionParams::fromParams(projection).projection.mahalanobis_threshold,
+                   GridProjectionConfig{}.mahalanobis_threshold);
   const GridProjectionParams pn = GridProjectionParams::fromParams(projection);
   EXPECT_EQ(pn.ground_frame, "velo_link");
   EXPECT_DOUBLE_EQ(pn.ground_height, -1.73);

@@ -58,6 +58,44 @@ struct DynamicGridConfig
   double birth_motion_fraction = 0.5;  ///< share of such newborn particles [0, 1]
   std::uint32_t seed = 42;             ///< seed of the std::mt19937 (same seed + input = same output)
 
+  // --- motion evidence (doc/grid_filter.md, "Motion evidence"). The previous reconstruction is
+  // vacated_to_dynamic = false, motion_window = 0, unknown_to_dynamic_by_motion,
+  // static_to_dynamic_by_motion and propagation_rate = 0, inherit_birth_velocity = false (and
+  // sensor_model.hit_neighbours_not_free = false). ---
+  /// Dynamic mass that left an observed cell with its particles becomes newborn dynamic mass in
+  /// proportion q = D / (S + D) (1 - exp(-m^2 / 2)): the dynamic share of the cell's occupied
+  /// mass times the significance m^2 = vx^2/var_x + vy^2/var_y of the velocity that left (the
+  /// next part of a moving object takes its place); the rest of the observed part is explained by
+  /// the measurement alone. False: all of it becomes unknown.
+  bool vacated_to_dynamic = true;
+  /// A cell is *vacated* when it held obstacle points within this window, is seen clearly free
+  /// (p_o <= 1/4) now and was believed occupied (P(S) + P(D) >= 0.6); it *appeared* when it
+  /// holds obstacle points now, was seen clearly free within the window and was believed free
+  /// (P(E) >= 0.6) [s] (>= 0; whole transition periods, rounded up; 0: the previous scan only,
+  /// with the looser tests p_o > 1/2 then p_o < 1/2, and no motion evidence).
+  double motion_window = 0.3;
+  /// A cell has motion evidence when it appeared, or lies within this distance of a vacated cell
+  /// [m] (>= 0). Vacated and appeared cells count only with a vacated (appeared) neighbour.
+  double motion_radius = 0.6;
+  /// The motion evidence of a cell decays as exp(-dt / motion_memory) [s] (> 0): slow objects
+  /// (less than a cell per scan) accumulate it over several scans.
+  double motion_memory = 0.45;
+  /// Share of the unknown-to-static transition that goes to dynamic instead in a cell with full
+  /// motion evidence [0, 1] (0: U -> S/D as eps_unknown_to_static/dynamic everywhere).
+  double unknown_to_dynamic_by_motion = 1.0;
+  /// Probability that the static mass of a cell measured occupied becomes dynamic within
+  /// transition_period at full motion evidence (a static object that starts) [0, 1).
+  double static_to_dynamic_by_motion = 0.1;
+  /// Newborn particles of a cell with motion evidence and persistent particles take the cell's
+  /// velocity estimate (mean, variance) instead of a random velocity.
+  bool inherit_birth_velocity = true;
+  /// Rigid-object prior: a cell measured occupied with P(D) >= 1/2, a significant velocity
+  /// (m^2 >= 9) and motion evidence turns this share of the static mass of the occupied cells on
+  /// its velocity line (both ways, up to propagation_length, across gaps of one cell) into
+  /// dynamic mass with its velocity, per transition_period [0, 1) (0 disables).
+  double propagation_rate = 0.3;
+  double propagation_length = 12.0;  ///< [m] (> 0)
+
   // --- classification (reporting only, the filter does not use it) ---
   double dynamic_threshold = 0.5;      ///< P(D) from which a cell may be dynamic (0..1]
   double min_dynamic_speed = 1.0;      ///< mean speed from which a cell may be dynamic [m/s] (>=0)
@@ -138,6 +176,9 @@ public:
   bool initialised() const { return initialised_; }
   double lastStamp() const { return last_stamp_; }
 
+  /// Motion evidence per cell in [0, 1] after the last cycle (see DynamicGridConfig::motion_window).
+  const std::vector<float>& motionEvidence() const { return motion_evidence_; }
+
   /// Replaces the classification thresholds (dynamic_threshold, min_dynamic_speed,
   /// mahalanobis_threshold, occupied_threshold) by those of `thresholds`; they only affect
   /// reporting, so this is safe between cycles. @throws std::invalid_argument as validate().
@@ -151,7 +192,10 @@ private:
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
   std::size_t birthAndResample(std::size_t& born, float dt);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
-  void findMotionCells(bool first);
+  void findMotionCells(bool first, float dt);
+  /// Rigid-object prior (propagation_rate): static mass of occupied cells on the velocity line of
+  /// a moving cell becomes newborn dynamic mass with that cell's velocity.
+  void propagateMotion(float dt);
   /// Velocity of a newborn particle at (x, y) of cell `cell` from a random vacated cell within
   /// birth_motion_speed * dt; false when there is none.
   bool motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy);
@@ -171,6 +215,13 @@ private:
   std::vector<float> from_dynamic_unknown_;  // D -> U mass arriving with particles
   std::vector<float> newborn_;               // posterior newborn dynamic mass
   std::vector<float> persistent_factor_;
+  // newborn mass by origin, as shares of the cell's newborn mass, and the velocity (mean,
+  // variance per axis) their particles take
+  std::vector<float> vacated_share_;     // vacated_to_dynamic: the velocity that left the cell
+  std::vector<float> start_share_;       // static_to_dynamic_by_motion: motion-driven velocity
+  std::vector<float> propagated_share_;  // propagation_rate: the source cell's velocity
+  std::vector<float> left_vx_, left_vy_, left_var_x_, left_var_y_;
+  std::vector<float> source_vx_, source_vy_, source_var_x_, source_var_y_, source_weight_;
   std::vector<float> stat_w_, stat_vx_, stat_vy_, stat_vxx_, stat_vyy_;
   // birth scratch
   std::vector<std::int32_t> birth_cell_;
@@ -178,6 +229,12 @@ private:
   // motion-driven birth
   std::vector<std::uint8_t> occupied_mask_;  // measured occupied (p_o > 1/2) in the last scan
   std::vector<std::uint8_t> previous_mask_;  // the same for the scan before, shifted with the grid
+  // motion evidence: scans since the cell last held obstacle points (low byte) / was seen
+  // clearly free (high byte), each saturating at 255, shifted with the grid; the evidence itself
+  std::vector<std::uint16_t> ages_, age_scratch_;
+  std::vector<float> motion_evidence_, evidence_scratch_;
+  std::vector<std::int32_t> vacated_count_;  // summed-area table of the vacated cells
+  std::vector<std::size_t> isolated_;        // scratch: vacated cells without a vacated neighbour
   std::vector<std::int32_t> vacated_;        // cells occupied in the previous scan, free now
   std::vector<std::int32_t> bucket_start_;   // vacated_ sorted by bucket: first index per bucket
   std::vector<std::int32_t> bucket_cells_;

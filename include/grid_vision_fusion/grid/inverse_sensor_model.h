@@ -48,6 +48,11 @@ struct InverseSensorModelConfig
   double p_occupied = 0.95;          ///< P(occupied) at an obstacle hit (0.5, 1)
   double p_free = 0.05;              ///< P(occupied) of a cell seen free (0, 0.5)
   double range_sigma = 0.2;          ///< std-dev of the hit range, width of the occupied band [m] (>0)
+  /// A cell next to (8-neighbourhood) a cell holding obstacle points is never observed free: at
+  /// grazing angles the nearest hit of a polar sector can lie beyond a surface that crosses the
+  /// sector, and the cells of that surface would flicker between hit and free from scan to scan
+  /// (false motion evidence). Such a cell gets p_o = 1/2 instead of p_o < 1/2.
+  bool hit_neighbours_not_free = true;
 
   /// @throws std::invalid_argument naming the first field out of its range.
   void validate() const;
@@ -101,6 +106,7 @@ private:
   std::vector<float> point_x_;           // per point: x relative to the sensor, world-aligned
   std::vector<float> point_y_;
   std::vector<std::uint8_t> cell_hit_;  // per cell: holds obstacle points
+  std::vector<std::uint8_t> near_hit_;  // per cell: a cell of its 3x3 neighbourhood holds obstacle points
 };
 
 /// atan2 with |error| < 1e-5 rad, branch-light (used for points and cells alike so that they

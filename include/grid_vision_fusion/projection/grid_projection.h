@@ -28,6 +28,10 @@ struct GridCellsView
   const float* p_dynamic = nullptr;  ///< P(dynamic occupied) per cell, [0, 1]
   const float* vx = nullptr;         ///< mean velocity along +x given dynamic [m/s], grid frame
   const float* vy = nullptr;         ///< mean velocity along +y given dynamic [m/s], grid frame
+  /// Variance of vx and of vy given dynamic [m²/s²]; optional (nullptr: no Mahalanobis test,
+  /// see GridProjectionConfig::mahalanobis_threshold).
+  const float* v_var_x = nullptr;
+  const float* v_var_y = nullptr;
 
   std::size_t size() const { return static_cast<std::size_t>(width) * height; }
   /// @throws std::invalid_argument when the resolution is not finite and > 0, the origin is not
@@ -73,6 +77,15 @@ struct GridProjectionConfig
   /// dynamic share of its occupied mass exceeds the ratio; STATIC otherwise (ties are static: an
   /// even split is no evidence of motion). 0.5 = "P(D) > P(S)". Range [0, 1).
   double dynamic_ratio = 0.5;
+  /// Velocity test of a DYNAMIC cell (the grid's own classification, Nuss et al. 2018): a cell
+  /// whose mass says DYNAMIC stays DYNAMIC only when its mean velocity is at least this fast
+  /// [m/s]; otherwise it is STATIC (a stopped object keeps dynamic mass while its particles slow
+  /// down). 0 disables the test (the paper's rule: the masses alone). Range >= 0.
+  double min_dynamic_speed = 1.0;
+  /// Mahalanobis test of a DYNAMIC cell: vx²/var_x + vy²/var_y must reach this (4: the velocity
+  /// is two standard deviations away from zero), otherwise STATIC. 0 disables it; it also needs
+  /// the variances in the GridCellsView. Range >= 0.
+  double mahalanobis_threshold = 0.0;
   /// Minimum depth along the optical axis [m]; nearer points (and those behind the camera) are
   /// dropped. Range > 0.
   double min_depth = 0.5;
@@ -128,6 +141,13 @@ inline CellState cellState(float p_static, float p_dynamic, const GridProjection
   return p_dynamic > config.dynamic_ratio * (static_cast<double>(p_static) + p_dynamic) ? CellState::kDynamic
                                                                                         : CellState::kStatic;
 }
+
+/// The state of a cell from its masses (cellState() above) and its velocity: DYNAMIC only when
+/// the masses say so, |(vx, vy)| >= config.min_dynamic_speed [m/s] and, when
+/// config.mahalanobis_threshold > 0 and the variances are given (var_x, var_y >= 0 [m²/s²];
+/// pass a negative value when unknown), vx²/var_x + vy²/var_y >= config.mahalanobis_threshold.
+CellState cellState(float p_static, float p_dynamic, float vx, float vy, float var_x, float var_y,
+                    const GridProjectionConfig& config);
 
 /// Projects the occupied cells of `grid` into `camera`: selects the cells (occupied_threshold),
 /// decides their state, predicts dynamic cells to the image stamp, projects the ground point

@@ -85,6 +85,15 @@ void visitParams(DynamicGridParams& p, Visitor& v)
   v("birth_motion_fraction", c.birth_motion_fraction);
   v("acceleration_sigma", c.acceleration_sigma);
   v("max_speed", c.max_speed);
+  v("vacated_to_dynamic", c.vacated_to_dynamic);
+  v("motion_window", c.motion_window);
+  v("motion_radius", c.motion_radius);
+  v("motion_memory", c.motion_memory);
+  v("unknown_to_dynamic_by_motion", c.unknown_to_dynamic_by_motion);
+  v("static_to_dynamic_by_motion", c.static_to_dynamic_by_motion);
+  v("inherit_birth_velocity", c.inherit_birth_velocity);
+  v("propagation_rate", c.propagation_rate);
+  v("propagation_length", c.propagation_length);
   v("seed", c.seed);
   v("dynamic_threshold", c.dynamic_threshold);
   v("min_dynamic_speed", c.min_dynamic_speed);
@@ -103,6 +112,7 @@ void visitParams(DynamicGridParams& p, Visitor& v)
   v("p_occupied", m.p_occupied);
   v("p_free", m.p_free);
   v("range_sigma", m.range_sigma);
+  v("hit_neighbours_not_free", m.hit_neighbours_not_free);
 }
 
 // --- yolo_detector -----------------------------------------------------------------------------
@@ -182,6 +192,8 @@ void visitParams(GridProjectionParams& p, Visitor& v)
   v.foreign("image_transport");
   v("occupied_threshold", p.projection.occupied_threshold);
   v("dynamic_ratio", p.projection.dynamic_ratio);
+  v("min_dynamic_speed", p.projection.min_dynamic_speed);
+  v("mahalanobis_threshold", p.projection.mahalanobis_threshold);
   v("min_depth", p.projection.min_depth);
   v("column_mode", p.projection.column_mode);
   v("column_height", p.projection.column_height);
