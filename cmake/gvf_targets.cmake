@@ -9,8 +9,16 @@
 # Warnings are errors on our own targets only.
 set(GVF_WARNINGS -Wall -Wextra -Werror)
 
+# scripts/run_tests.sh --sanitize: AddressSanitizer + UndefinedBehaviorSanitizer on every target
+# of the package (undefined behaviour aborts instead of printing and going on).
+option(GVF_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+if(GVF_SANITIZE)
+  set(GVF_SANITIZER_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -g)
+endif()
+
 function(_gvf_common target)
-  target_compile_options(${target} PRIVATE ${GVF_WARNINGS})
+  target_compile_options(${target} PRIVATE ${GVF_WARNINGS} ${GVF_SANITIZER_FLAGS})
+  target_link_options(${target} PRIVATE ${GVF_SANITIZER_FLAGS})
   target_include_directories(${target} PUBLIC
     $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CATKIN_GLOBAL_INCLUDE_DESTINATION}>)

@@ -4,6 +4,7 @@
 #
 # Usage: scripts/build.sh            (workspace in ~/.cache/grid_vision_fusion/workspace)
 #        GVF_WORKSPACE=/path scripts/build.sh
+#        GVF_CMAKE_ARGS="-DGVF_SANITIZE=ON" scripts/build.sh   (extra CMake arguments)
 set -eo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -19,7 +20,8 @@ mkdir -p "$workspace/src"
 ln -sfn "$root" "$workspace/src/grid_vision_fusion"
 cd "$workspace"
 echo "[build] building in $workspace (catkin_make, $jobs jobs)"
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$jobs"
+# shellcheck disable=SC2086
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 ${GVF_CMAKE_ARGS:-} -j"$jobs"
 if [[ "${GVF_BUILD_TESTS:-1}" != 0 ]]; then
   catkin_make tests -j"$jobs"
 fi

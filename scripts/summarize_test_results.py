@@ -3,8 +3,11 @@
 
 gtest, rosunit (the gtest results of rostests) and roslaunch-check files are counted case by
 case. A rostest wrapper file only counts when it failed: then the test process crashed or timed
-out before writing its own results. Exits 1 when anything failed or nothing ran.
+out before writing its own results. With --sanitizer-reports DIR, every report file that the
+AddressSanitizer or UndefinedBehaviorSanitizer runtime wrote there counts as a failure too.
+Exits 1 when anything failed or nothing ran.
 """
+import argparse
 import glob
 import os
 import sys
@@ -20,10 +23,17 @@ def cases(path):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: summarize_test_results.py TEST_RESULTS_DIR")
-    files = sorted(glob.glob(os.path.join(sys.argv[1], "**", "*.xml"), recursive=True))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("results", help="the catkin test_results folder")
+    parser.add_argument("--sanitizer-reports", metavar="DIR", help="folder of sanitizer log files")
+    args = parser.parse_args()
+    files = sorted(glob.glob(os.path.join(args.results, "**", "*.xml"), recursive=True))
     passed, failed = 0, []
+    reports = glob.glob(os.path.join(args.sanitizer_reports, "*")) if args.sanitizer_reports else []
+    for report in sorted(reports):
+        with open(report, errors="replace") as text:
+            sys.stderr.write("--- %s\n%s\n" % (report, "".join(text.readlines()[:40])))
+        failed.append("sanitizer report %s" % report)
     for path in files:
         wrapper = os.path.basename(path).startswith("rostest-")
         try:
