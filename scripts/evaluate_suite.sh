@@ -15,6 +15,8 @@
 #   --devel DIR           its devel space, if not WORKSPACE/devel
 #   -j, --jobs N          scenarios run in parallel (default 2)
 #   --scenario-dir DIR    folder of scenario YAML files (default: config/scenarios)
+#   --config-dir DIR      the nodes' parameter files for run_pipeline (default: the package's
+#                         config/), to score a tuned configuration
 #   --thresholds FILE     JSON thresholds (e.g. config/scenarios/targets.json): exit 3 when one
 #                         is not met
 #   --junit FILE          also write the threshold checks as JUnit XML (for the test command)
@@ -35,6 +37,7 @@ keep=false
 only=""
 thresholds=""
 junit=""
+config_dir=""
 export PATH=/usr/bin:/bin:$PATH
 
 usage_error() {
@@ -51,7 +54,7 @@ while [[ $# -gt 0 ]]; do
       exit 0
       ;;
     --keep) keep=true ;;
-    --scenarios | --output | --workspace | --devel | -j | --jobs | --scenario-dir | --thresholds | --junit)
+    --scenarios | --output | --workspace | --devel | -j | --jobs | --scenario-dir | --thresholds | --junit | --config-dir)
       [[ $# -ge 2 ]] || usage_error "$1 needs a value"
       case "$1" in
         --scenarios) only=$2 ;;
@@ -62,6 +65,7 @@ while [[ $# -gt 0 ]]; do
         --scenario-dir) scenario_dir=$(absolute "$2") ;;
         --thresholds) thresholds=$(absolute "$2") ;;
         --junit) junit=$(absolute "$2") ;;
+        --config-dir) config_dir=$(absolute "$2") ;;
       esac
       shift
       ;;
@@ -73,6 +77,9 @@ done
 [[ "$jobs" =~ ^[1-9][0-9]*$ ]] || usage_error "--jobs needs a positive integer, got '$jobs'"
 [[ -d "$scenario_dir" ]] || usage_error "no scenario folder $scenario_dir"
 [[ -z "$thresholds" || -f "$thresholds" ]] || usage_error "no thresholds file $thresholds"
+[[ -z "$config_dir" || -d "$config_dir" ]] || usage_error "no config folder $config_dir"
+pipeline_options=()
+[[ -z "$config_dir" ]] || pipeline_options=(--config-dir "$config_dir")
 
 # The scenarios: every *.yaml of the folder, sorted, or the --scenarios subset in its order.
 mapfile -t available < <(find "$scenario_dir" -maxdepth 1 -name '*.yaml' -printf '%f\n' | sed 's/\.yaml$//' | sort)
@@ -139,7 +146,7 @@ run_scenario() {
     rm -rf "$drive/image_02/data" "$drive/velodyne_points/data"
   fi
   step run_pipeline "$tools/run_pipeline" --bag "$work/drive.bag" --output "$work/objects.bag" \
-    --backend replay --replay-directory "$drive/label_2" || return 1
+    --backend replay --replay-directory "$drive/label_2" "${pipeline_options[@]}" || return 1
   step evaluate "$tools/evaluate" --drive "$drive" --detections "$work/objects.bag" \
     --output "$out/scenarios/$name" || return 1
   [[ "$keep" == true ]] || rm -rf "$work"
