@@ -56,18 +56,32 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
   return order;
 }
 
-FusedObject pointwiseFeatures(std::size_t detection_index, const std::vector<std::size_t>& members,
-                              const ProjectedPointsView& points, const FusionConfig& config)
+FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& box,
+                              const std::vector<std::size_t>& members, const ProjectedPointsView& points,
+                              const FusionConfig& config)
 {
   FusedObject object;
   object.detection_index = detection_index;
   std::vector<double> xs, ys, vxs, vys;
   xs.reserve(members.size());
   ys.reserve(members.size());
+  object.members.reserve(members.size());
   for (std::size_t i : members)
   {
     xs.push_back(points.x[i]);
     ys.push_back(points.y[i]);
+    object.members.push_back(static_cast<std::uint32_t>(i));
+  }
+  object.median_x = median(xs);
+  object.median_y = median(ys);
+  object.x = object.median_x;
+  object.y = object.median_y;
+  const std::vector<std::uint32_t> voters =
+      config.motion_vote == MotionVote::kCluster
+          ? objectCluster(points, object.members, box, config.centre.cluster_distance)
+          : object.members;
+  for (std::uint32_t i : voters)
+  {
     if (points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic))
     {
       ++object.dynamic_points;
@@ -78,15 +92,6 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const std::vector<std
     {
       ++object.static_points;
     }
-  }
-  object.median_x = median(xs);
-  object.median_y = median(ys);
-  object.x = object.median_x;
-  object.y = object.median_y;
-  object.members.reserve(members.size());
-  for (std::size_t i : members)
-  {
-    object.members.push_back(static_cast<std::uint32_t>(i));
   }
   object.motion = decideMotion(object.static_points, object.dynamic_points, config);
   if (object.motion == Motion::kDynamic)
@@ -128,6 +133,24 @@ PositionSource positionSourceFromString(const std::string& name)
     return PositionSource::kMedian;
   }
   throw std::invalid_argument("position must be \"centre\" or \"median\", got \"" + name + "\"");
+}
+
+MotionVote motionVoteFromString(const std::string& name)
+{
+  if (name == "region")
+  {
+    return MotionVote::kRegion;
+  }
+  if (name == "cluster")
+  {
+    return MotionVote::kCluster;
+  }
+  throw std::invalid_argument("motion_vote must be \"region\" or \"cluster\", got \"" + name + "\"");
+}
+
+std::string toString(MotionVote vote)
+{
+  return vote == MotionVote::kRegion ? "region" : "cluster";
 }
 
 std::string toString(PositionSource source)
@@ -294,7 +317,7 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
   {
     if (!members[d].empty())
     {
-      result.objects.push_back(pointwiseFeatures(d, members[d], points, config));
+      result.objects.push_back(pointwiseFeatures(d, detections[d].box, members[d], points, config));
       result.objects.back().id = static_cast<std::uint32_t>(result.objects.size() - 1);
     }
   }

@@ -20,6 +20,9 @@ constexpr double kFineStepRad = M_PI / 180.0;
 /// A cell counts fully up to this fraction of the box height below the bottom edge, then less
 /// (Gaussian with this fraction as σ).
 constexpr double kBelowToleranceFraction = 0.05;
+/// The same above the bottom edge: the object's ground cells project near its bottom edge, the
+/// cells of what stands behind it higher.
+constexpr double kAboveToleranceFraction = 0.1;
 
 /// Closeness score of the bounding rectangle at orientation `theta` (higher is better).
 double closeness(const std::vector<double>& x, const std::vector<double>& y, double theta)
@@ -214,38 +217,41 @@ double fitOrientation(const std::vector<double>& x, const std::vector<double>& y
   return best_theta;
 }
 
-CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vector<std::uint32_t>& members,
-                              const BoundingBox& box, double camera_x, double camera_y,
-                              const Footprint* footprint, const CentreConfig& config)
+std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
+                                         const std::vector<std::uint32_t>& members, const BoundingBox& box,
+                                         double cluster_distance)
 {
-  if (members.empty())
-  {
-    throw std::invalid_argument("estimateCentre: no points");
-  }
   const std::size_t n = members.size();
   std::vector<double> xs(n), ys(n);
   for (std::size_t k = 0; k < n; ++k)
   {
     if (members[k] >= points.size)
     {
-      throw std::invalid_argument("estimateCentre: point index " + std::to_string(members[k]) +
+      throw std::invalid_argument("objectCluster: point index " + std::to_string(members[k]) +
                                   " outside the " + std::to_string(points.size) + " points");
     }
     xs[k] = points.x[members[k]];
     ys[k] = points.y[members[k]];
   }
+  if (n == 0)
+  {
+    return {};
+  }
 
-  // The object's cluster: the most cells at or above the bottom edge.
-  const std::vector<std::size_t> label = clusterPoints(xs, ys, config.cluster_distance);
-  const double sigma_px = kBelowToleranceFraction * std::max(static_cast<double>(box.height()), 1.0);
+  // The object's cluster: the most cells near the bottom edge.
+  const std::vector<std::size_t> label = clusterPoints(xs, ys, cluster_distance);
+  const double box_height = std::max(static_cast<double>(box.height()), 1.0);
+  const double below_px = kBelowToleranceFraction * box_height;
+  const double above_px = kAboveToleranceFraction * box_height;
   std::map<std::size_t, std::pair<double, float>> score_of;  // label -> (score, lowest row)
   for (std::size_t k = 0; k < n; ++k)
   {
     const float v = points.v[members[k]];
-    const double below = std::max(static_cast<double>(v) - box.y_max - sigma_px, 0.0) / sigma_px;
+    const double below = std::max(static_cast<double>(v) - box.y_max - below_px, 0.0) / below_px;
+    const double above = std::max(box.y_max - static_cast<double>(v) - above_px, 0.0) / above_px;
     auto& [score, lowest] =
         score_of.try_emplace(label[k], 0.0, -std::numeric_limits<float>::infinity()).first->second;
-    score += std::exp(-below * below);
+    score += std::exp(-below * below - above * above);
     lowest = std::max(lowest, v);
   }
   std::size_t chosen = score_of.begin()->first;
@@ -258,14 +264,30 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
       chosen = l;
     }
   }
-  std::vector<double> cx, cy;
+  std::vector<std::uint32_t> cluster;
   for (std::size_t k = 0; k < n; ++k)
   {
     if (label[k] == chosen)
     {
-      cx.push_back(xs[k]);
-      cy.push_back(ys[k]);
+      cluster.push_back(members[k]);
     }
+  }
+  return cluster;
+}
+
+CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vector<std::uint32_t>& members,
+                              const BoundingBox& box, double camera_x, double camera_y,
+                              const Footprint* footprint, const CentreConfig& config)
+{
+  if (members.empty())
+  {
+    throw std::invalid_argument("estimateCentre: no points");
+  }
+  std::vector<double> cx, cy;
+  for (std::uint32_t i : objectCluster(points, members, box, config.cluster_distance))
+  {
+    cx.push_back(points.x[i]);
+    cy.push_back(points.y[i]);
   }
 
   CentreEstimate estimate;

@@ -125,12 +125,12 @@ void FusionNodelet::onInit()
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
   NODELET_INFO(
-      "fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, position %s, "
-      "tracking %s, %s sync, %s",
+      "fusion: band [-%.2f h, +%.2f h] around the box bottom, min_points %d, tie rule %s, motion vote %s, "
+      "position %s, tracking %s, %s sync, %s",
       params.fusion.band_above, params.fusion.band_below, params.fusion.min_points,
-      toString(params.fusion.tie_rule).c_str(), toString(params.fusion.position).c_str(),
-      params.tracking ? "on" : "off", approximate_sync ? "approximate" : "exact",
-      params.lazy ? "lazy" : "always subscribed");
+      toString(params.fusion.tie_rule).c_str(), toString(params.fusion.motion_vote).c_str(),
+      toString(params.fusion.position).c_str(), params.tracking ? "on" : "off",
+      approximate_sync ? "approximate" : "exact", params.lazy ? "lazy" : "always subscribed");
 }
 
 void FusionNodelet::connectCb()

@@ -51,6 +51,10 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, PositionSource& out)
 {
   return enumFromParam(value, out, positionSourceFromString);
 }
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, MotionVote& out)
+{
+  return enumFromParam(value, out, motionVoteFromString);
+}
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out)
 {
   return enumFromParam(value, out, resizeModeFromString);
@@ -68,6 +72,10 @@ XmlRpc::XmlRpcValue toParamValue(TieRule value)
   return toParamValue(toString(value));
 }
 XmlRpc::XmlRpcValue toParamValue(PositionSource value)
+{
+  return toParamValue(toString(value));
+}
+XmlRpc::XmlRpcValue toParamValue(MotionVote value)
 {
   return toParamValue(toString(value));
 }

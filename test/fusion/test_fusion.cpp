@@ -338,6 +338,50 @@ TEST(Fuse, StaticPointVelocityIsNotUsed)
   EXPECT_EQ(result.objects[0].motion, Motion::kStatic);
 }
 
+TEST(FusionConfig, MotionVoteNames)
+{
+  EXPECT_EQ(motionVoteFromString("region"), MotionVote::kRegion);
+  EXPECT_EQ(motionVoteFromString("cluster"), MotionVote::kCluster);
+  EXPECT_EQ(toString(MotionVote::kCluster), "cluster");
+  EXPECT_THROW(motionVoteFromString("box"), std::invalid_argument);
+}
+
+// A pedestrian (4 dynamic cells at the bottom edge, 10–10.3 m) in front of a wall (7 static
+// cells 3 m behind, projected 19 px = 24 % of the box height above the bottom edge): the
+// region's vote is 7 static : 4 dynamic, the pedestrian's own cluster votes 0 : 4 (the wall's
+// cells weigh exp(−((19 − 8)/8)²) = 0.15 each in the choice of the cluster: 1.1 against 4).
+TEST(Fuse, ClusterVoteLeavesOutTheCellsAroundTheObject)
+{
+  ProjectedPoints pts;
+  const float vx[] = {1.0F, 1.2F, 1.4F, 1.6F};
+  for (int k = 0; k < 4; ++k)
+  {
+    addDynamic(pts, 140.F + 5.F * static_cast<float>(k), 178.F, 10.F + 0.1F * static_cast<float>(k), 0.2F,
+               vx[k], 0.F);
+  }
+  for (int k = 0; k < 7; ++k)
+  {
+    addStatic(pts, 120.F + 10.F * static_cast<float>(k), 161.F, 13.F, -1.F + 0.2F * static_cast<float>(k));
+  }
+  FusionConfig config;
+  const FusionResult region = fuse({kBox}, pts.view(), config);
+  ASSERT_EQ(region.objects.size(), 1U);
+  EXPECT_EQ(region.objects[0].motion, Motion::kStatic);
+  EXPECT_EQ(region.objects[0].static_points, 7U);
+
+  config.motion_vote = MotionVote::kCluster;
+  const FusionResult cluster = fuse({kBox}, pts.view(), config);
+  ASSERT_EQ(cluster.objects.size(), 1U);
+  const FusedObject& o = cluster.objects[0];
+  EXPECT_EQ(o.motion, Motion::kDynamic);
+  EXPECT_EQ(o.static_points, 0U);
+  EXPECT_EQ(o.dynamic_points, 4U);
+  EXPECT_FLOAT_EQ(o.vx, 1.3F);  // median of 1.0, 1.2, 1.4, 1.6
+  // The position stays the region's median (the paper's): the 6th of the 11 x values sorted.
+  EXPECT_FLOAT_EQ(o.median_x, 13.F);
+  EXPECT_EQ(o.members.size(), 11U);
+}
+
 TEST(CheckFusionInputs, AcceptsGoodAndNamesTheFault)
 {
   EXPECT_EQ(checkFusionInputs({kBox}, 640, 480, 640, 480), "");

@@ -1,6 +1,6 @@
 // Unit tests of the object centre estimate on constructed cell sets: a car seen from behind,
-// from the side and across a corner, a rotated car, an occluder in front, a class without a
-// footprint; and of the outline orientation fit.
+// from the side and across a corner, a rotated car, an occluder in front, a wall behind, a class
+// without a footprint; and of the outline orientation fit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -126,6 +126,24 @@ TEST(ObjectCentre, CellsBelowTheBottomEdgeBelongToAnObjectInFront)
   EXPECT_EQ(
       estimateCentre(near_edge.view(), all(near_edge), kBox, 0.0, 0.0, &truck, CentreConfig{}).cluster_points,
       12U);
+}
+
+TEST(ObjectCentre, CellsHighAboveTheBottomEdgeBelongToWhatStandsBehind)
+{
+  // A pedestrian (3 cells at x = 10, bottom edge row 300) before a wall 3 m behind whose 12
+  // cells project 25 px higher (25 % of the box height): each wall cell weighs
+  // exp(−((25 − 10)/10)²) = 0.11, 12 of them 1.3 against the pedestrian's 3.
+  ProjectedPoints points;
+  addFace(points, 13.0, -1.0, 13.0, 1.2, 275.F);
+  addFace(points, 10.0, -0.2, 10.0, 0.2, 300.F);
+  const std::vector<std::uint32_t> cluster = objectCluster(points.view(), all(points), kBox, 0.5);
+  EXPECT_EQ(cluster, (std::vector<std::uint32_t>{12, 13, 14}));
+  // Within 10 % of h above the edge a cell counts fully: the wall at row 291 wins by number.
+  ProjectedPoints close;
+  addFace(close, 13.0, -1.0, 13.0, 1.2, 291.F);
+  addFace(close, 10.0, -0.2, 10.0, 0.2, 300.F);
+  EXPECT_EQ(objectCluster(close.view(), all(close), kBox, 0.5).size(), 12U);
+  EXPECT_TRUE(objectCluster(close.view(), {}, kBox, 0.5).empty());
 }
 
 TEST(ObjectCentre, WithoutAFootprintTheCentreOfTheCells)

@@ -36,6 +36,18 @@ PositionSource positionSourceFromString(const std::string& name);
 /// The name parsed by positionSourceFromString().
 std::string toString(PositionSource source);
 
+/// Which cells of a fusion region vote for its motion.
+enum class MotionVote
+{
+  kRegion,   ///< every cell of the region (the paper's point-wise cardinality)
+  kCluster,  ///< the cells of the object's own cluster only: objectCluster() of the region
+};
+
+/// Parses "region" or "cluster". @throws std::invalid_argument otherwise.
+MotionVote motionVoteFromString(const std::string& name);
+/// The name parsed by motionVoteFromString().
+std::string toString(MotionVote vote);
+
 /// Parameters of the fusion region and of the point-wise feature processing.
 struct FusionConfig
 {
@@ -55,6 +67,10 @@ struct FusionConfig
   /// touches the ground lower in the image stands nearer to the camera and hides the others.
   /// Equal y_max: the higher score wins, then the earlier detection.
   bool exclusive_assignment = false;
+  /// Which cells vote for the motion (and give the velocity). kCluster leaves out the cells of
+  /// other objects that the band collects around a small one (walls, parked cars, the ground
+  /// beside a pedestrian); the cluster is formed at centre.cluster_distance.
+  MotionVote motion_vote = MotionVote::kRegion;
   /// What the fusion stage reports as the position (fuse() itself always gives the median).
   PositionSource position = PositionSource::kCentre;
   /// The centre estimate (used with PositionSource::kCentre).
@@ -98,15 +114,15 @@ struct FusedObject
   /// The object's id: its index in FusionResult::objects from fuse(), the track id once tracked.
   std::uint32_t id = 0;
   Motion motion = Motion::kUnknown;
-  std::uint32_t static_points = 0;
-  std::uint32_t dynamic_points = 0;
-  double x = 0.0;         ///< reported position x [m]: median_x from fuse(), then centre or track
-  double y = 0.0;         ///< reported position y [m]
-  double median_x = 0.0;  ///< median x of all region points [m] (the paper's position)
-  double median_y = 0.0;  ///< median y of all region points [m]
-  double vx = 0.0;        ///< median vx of the dynamic points [m/s]; 0 unless kDynamic
-  double vy = 0.0;        ///< median vy of the dynamic points [m/s]; 0 unless kDynamic
-  double heading = 0.0;   ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+  std::uint32_t static_points = 0;   ///< static cells of the vote (region or cluster)
+  std::uint32_t dynamic_points = 0;  ///< dynamic cells of the vote
+  double x = 0.0;                    ///< reported position x [m]: median_x from fuse(), then centre or track
+  double y = 0.0;                    ///< reported position y [m]
+  double median_x = 0.0;             ///< median x of all region points [m] (the paper's position)
+  double median_y = 0.0;             ///< median y of all region points [m]
+  double vx = 0.0;                   ///< median vx of the vote's dynamic points [m/s]; 0 unless kDynamic
+  double vy = 0.0;                   ///< median vy of the vote's dynamic points [m/s]; 0 unless kDynamic
+  double heading = 0.0;              ///< atan2(vy, vx) [rad]; 0 unless kDynamic
   std::vector<std::uint32_t> members;  ///< indices of the region's valid points
 
   double speed() const;
@@ -135,7 +151,8 @@ Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, c
 
 /// Fuses the detector boxes with the projected grid points: builds the fusion region of every
 /// box, collects the valid points inside it and computes its point-wise features (position:
-/// the median, whatever config.position says). Regions without any point are discarded; ids
+/// the median of the region, whatever config.position says; motion and velocity from the cells
+/// config.motion_vote names). Regions without any point are discarded; ids
 /// are 0, 1, 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
 /// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,

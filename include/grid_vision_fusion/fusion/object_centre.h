@@ -66,15 +66,25 @@ struct CentreEstimate
 /// search in 9° steps, then 1° steps within ±4° of the best. 0 for fewer than 3 points [rad].
 double fitOrientation(const std::vector<double>& x, const std::vector<double>& y);
 
+/// The cells of `members` (indices into `points`) that belong to the object whose box is `box`:
+/// the members are clustered by single linkage at `cluster_distance`, and the object's cluster is
+/// the one with the most cells near the box's bottom edge in the image, where the object meets
+/// the ground. A cell projected below the bottom edge (v > y_max + 5 % of the box height h) is
+/// nearer than the object's nearest ground point: it belongs to an object in front. A cell
+/// projected higher than y_max − 10 % of h lies behind the object's near face: the walls, parked
+/// cars and kerbs that the band collects around a small object. Such cells count less the
+/// farther out they lie (Gaussian, σ = 5 % of h below, 10 % above). Ties go to the cluster
+/// reaching lowest in the image.
+/// The indices keep the order of `members`; empty when `members` is.
+/// @throws std::invalid_argument when `members` holds an index outside `points`.
+std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
+                                         const std::vector<std::uint32_t>& members, const BoundingBox& box,
+                                         double cluster_distance);
+
 /// The centre of the object whose box is `box` from the region points `members` of `points`
 /// (indices, non-empty), seen from `camera_x`, `camera_y` (the camera's optical centre in the
 /// frame of the points [m]):
-/// 1. the members are clustered by single linkage at config.cluster_distance;
-/// 2. the object's cluster is the one with the most cells at or above the box bottom edge in
-///    the image: a cell projected below the bottom edge (v > y_max + 5 % of the box height) is
-///    nearer than the object's nearest ground point, so it belongs to an object in front, and it
-///    counts less the farther below it lies (Gaussian, σ = 5 % of the box height); ties go to
-///    the cluster reaching lowest in the image;
+/// 1.–2. the object's cells are objectCluster() at config.cluster_distance;
 /// 3. its orientation comes from fitOrientation();
 /// 4. with a footprint, its length goes along the axis that explains the face seen most
 ///    squarely (the observed extent across the viewing direction matches one dimension), and

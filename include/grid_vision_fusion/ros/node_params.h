@@ -23,11 +23,13 @@ namespace grid_vision_fusion
 // --- enumerations: read from and written as their names ----------------------------------------
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, TieRule& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, PositionSource& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, MotionVote& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, ResizeMode& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, YoloOutputLayout& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, FrameIndexSource& out);
 XmlRpc::XmlRpcValue toParamValue(TieRule value);
 XmlRpc::XmlRpcValue toParamValue(PositionSource value);
+XmlRpc::XmlRpcValue toParamValue(MotionVote value);
 XmlRpc::XmlRpcValue toParamValue(ResizeMode value);
 XmlRpc::XmlRpcValue toParamValue(YoloOutputLayout value);
 XmlRpc::XmlRpcValue toParamValue(FrameIndexSource value);
@@ -233,6 +235,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("min_points", p.fusion.min_points);
   v("tie_rule", p.fusion.tie_rule);
   v("exclusive_assignment", p.fusion.exclusive_assignment);
+  v("motion_vote", p.fusion.motion_vote);
   v("position", p.fusion.position);
   v("centre_cluster_distance", p.fusion.centre.cluster_distance);
   v("class_footprints", p.fusion.centre.footprints);
