@@ -67,6 +67,8 @@ gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_no
   SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
 gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test
   SOURCES test/nodelets/test_fusion_nodelet.cpp)
+gvf_rostest(test_bad_input LAUNCH test/nodelets/bad_input.test
+  SOURCES test/nodelets/test_bad_input.cpp LINK gvf_tiny_darknet)
 gvf_rostest(test_zero_copy LAUNCH test/nodelets/zero_copy.test SOURCES test/nodelets/test_zero_copy.cpp)
 gvf_rostest(test_pipeline_equivalence LAUNCH test/nodelets/pipeline_equivalence.test
   SOURCES test/nodelets/test_pipeline_equivalence.cpp LINK grid_vision_fusion_offline grid_vision_fusion_simulation)

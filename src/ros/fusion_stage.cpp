@@ -24,6 +24,11 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   {
     throw std::invalid_argument("projected grid: " + grid_error);
   }
+  if (detections.detections.size() > kMaxFusionDetections)
+  {
+    throw std::invalid_argument(std::to_string(detections.detections.size()) + " detections, more than the " +
+                                std::to_string(kMaxFusionDetections) + " a pair may hold");
+  }
   FusedPair pair;
   pair.detections = detectionsFromMsg(detections);
   const std::string input_error = checkFusionInputs(

@@ -13,6 +13,11 @@
 
 namespace grid_vision_fusion
 {
+/// The most detections one pair may hold. A detector gives tens per image; many more would make
+/// the fusion regions and the tracker's assignment (cubic in the count) run for minutes and
+/// take gigabytes, so such a pair is refused.
+constexpr std::size_t kMaxFusionDetections = 1000;
+
 /// A fused detection / projected-grid pair.
 struct FusedPair
 {
@@ -33,7 +38,8 @@ public:
   /// (estimateCentres() unless params.fusion.position is kMedian), with tracking the tracker
   /// (only objects of confirmed tracks stay, with the track's id, motion, position and
   /// velocity), then objectsToMsg(). Pairs must come in stamp order.
-  /// @throws std::invalid_argument naming what is wrong with the pair (the tracker is untouched).
+  /// @throws std::invalid_argument naming what is wrong with the pair, e.g. more than
+  ///         kMaxFusionDetections detections (the tracker is untouched).
   FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid);
 
   /// Replaces the fusion configuration (dynamic_reconfigure). @throws std::invalid_argument
