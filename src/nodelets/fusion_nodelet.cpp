@@ -222,6 +222,12 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
                           sub_grid_.getTopic().c_str(), e.what());
     return;
   }
+  if (!pair.tracks_reset.empty())
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: tracks reset at t=%.3f (%s): %s",
+                          detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
+                          pair.tracks_reset.c_str());
+  }
   const std::vector<Detection>& detections = pair.detections;
   const FusionResult& result = pair.result;
   const ProjectedPointsView points = viewOf(*grid_msg);

@@ -596,6 +596,16 @@ std::vector<Case> cases()
          b.pub_points_.publish(makeCloud(720, stamp, "velo_link"));
        },
        "time jumped backwards by", ""},
+      {"PairTimeGoesBackwards", "fusion",
+       [](Bench& b)
+       {
+         const ros::Time stamp = b.next("fusion") - ros::Duration(30.0);
+         b.setClock("fusion", stamp);
+         b.bad_outputs_.insert(stamp);
+         b.pub_detections_.publish(makeDetections(stamp));
+         b.pub_projected_.publish(makeProjected(stamp));
+       },
+       "fusion: tracks reset at t=", "fusion/reset"},
       {"CameraInfoBeforeItsTf", "grid_projection",
        [](Bench& b)
        {

@@ -24,6 +24,9 @@ struct FusedPair
   std::vector<Detection> detections;  ///< the boxes of the Detection2DArray
   FusionResult result;                ///< the objects as published (tracked when tracking is on)
   DetectedObjectArray::Ptr objects;   ///< the message (stamp of the image, grid frame)
+  /// With tracking: why the tracks were dropped before this pair (time going backwards, a gap
+  /// above track_max_gap); empty when they were kept.
+  std::string tracks_reset;
 };
 
 /// The fusion with its parameters, and the tracker that carries the objects from pair to pair.
@@ -54,6 +57,8 @@ public:
 private:
   FusionParams params_;
   Tracker tracker_;
+  bool has_stamp_ = false;
+  double last_stamp_ = 0.0;  ///< of the last pair tracked
 };
 
 }  // namespace grid_vision_fusion
