@@ -1,5 +1,6 @@
-// Checks of a sensor_msgs/Image before its pixels are read (cv_bridge trusts width, height, step
-// and the data size as they come).
+// Checks of a sensor_msgs/Image before its pixels are read. cv_bridge refuses a wrongly formed
+// image too, but with its own wording and only once the image is converted; this check names
+// the fault the same way for every nodelet, at arrival, and also refuses a 0 x 0 image.
 #pragma once
 
 #include <sensor_msgs/Image.h>
