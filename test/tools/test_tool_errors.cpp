@@ -112,7 +112,8 @@ fs::path ToolErrors::root_, ToolErrors::drive_, ToolErrors::full_bag_, ToolError
 
 std::string replayArgs(const fs::path& drive)
 {
-  return " --backend replay --replay-directory " + (drive / "label_2").string();
+  return " --config-dir " GVF_SOURCE_DIR "/config --backend replay --replay-directory " +
+         (drive / "label_2").string();
 }
 
 TEST_F(ToolErrors, RunPipelineNamesATruncatedBagAndSuggestsReindex)
