@@ -238,6 +238,8 @@ public:
     pub_grid_ = nh_.advertise<DynamicGrid>("/bad/grid_in", 10);
     pub_info_ = nh_.advertise<sensor_msgs::CameraInfo>("/bad/camera_info", 10);
     pub_detections_ = nh_.advertise<Detection2DArray>("/bad/detections_in", 10);
+    pub_projection_image_ = nh_.advertise<sensor_msgs::Image>("/bad/projection_image", 10);
+    pub_fusion_image_ = nh_.advertise<sensor_msgs::Image>("/bad/fusion_image", 10);
     pub_projected_ = nh_.advertise<ProjectedGrid>("/bad/projected_grid_in", 10);
     sub_rosout_ = nh_.subscribe<rosgraph_msgs::Log>(
         "/rosout", 1000, [this](const rosgraph_msgs::Log::ConstPtr& m) { log_.push_back(m); });
@@ -250,6 +252,11 @@ public:
     sub_projected_ = nh_.subscribe<ProjectedGrid>("/bad/projected_grid", 5,
                                                   [this](const ProjectedGrid::ConstPtr& m)
                                                   { outputs_["grid_projection"].insert(m->header.stamp); });
+    // The overlays are subscribed so that the nodelets take images (they are lazy).
+    sub_overlays_[0] = nh_.subscribe<sensor_msgs::Image>(
+        "/bad/projected_grid/image", 1, [this](const sensor_msgs::Image::ConstPtr&) { ++overlays_; });
+    sub_overlays_[1] = nh_.subscribe<sensor_msgs::Image>(
+        "/bad/objects/image", 1, [this](const sensor_msgs::Image::ConstPtr&) { ++overlays_; });
     sub_objects_ = nh_.subscribe<DetectedObjectArray>("/bad/objects", 5,
                                                       [this](const DetectedObjectArray::ConstPtr& m)
                                                       { outputs_["fusion"].insert(m->header.stamp); });
@@ -261,6 +268,7 @@ public:
     return pub_points_.getNumSubscribers() > 0 && pub_image_.getNumSubscribers() > 0 &&
            pub_grid_.getNumSubscribers() > 0 && pub_info_.getNumSubscribers() > 0 &&
            pub_detections_.getNumSubscribers() > 0 && pub_projected_.getNumSubscribers() > 0 &&
+           pub_projection_image_.getNumSubscribers() > 0 && pub_fusion_image_.getNumSubscribers() > 0 &&
            sub_rosout_.getNumPublishers() >= 2;  // the manager's and this node's own
   }
 
@@ -344,11 +352,15 @@ public:
 
   ros::NodeHandle nh_;
   ros::Publisher pub_points_, pub_image_, pub_grid_, pub_info_, pub_detections_, pub_projected_;
+  ros::Publisher pub_projection_image_, pub_fusion_image_;
   tf2_ros::TransformBroadcaster tf_;
   std::set<ros::Time> bad_outputs_;  ///< stamps of bad inputs whose output a case expects
 
 private:
   ros::Subscriber sub_rosout_, sub_grid_, sub_detections_, sub_projected_, sub_objects_;
+  ros::Subscriber sub_overlays_[2];
+  std::size_t overlays_ =
+      0;  ///< overlay images received (not checked: the overlays only make the nodelets take images)
   std::vector<rosgraph_msgs::Log::ConstPtr> log_;
   std::map<std::string, std::set<ros::Time>> outputs_;
   std::map<std::string, ros::Time> clocks_;
@@ -538,6 +550,23 @@ std::vector<Case> cases()
       {"CloudEmptyFrameId", "dynamic_grid",
        badCloud([](sensor_msgs::PointCloud2& c) { c.header.frame_id.clear(); }),
        "the cloud has an empty frame_id", "grid/tf"},
+      {"OverlayImageTooShort", "grid_projection",
+       [](Bench& b)
+       {
+         auto image = makeImage(b.next("grid_projection"));
+         image->data.resize(100);
+         b.pub_projection_image_.publish(image);
+       },
+       "grid_projection: image on /bad/projection_image at t=", "projection/image"},
+      {"OverlayImageOfZeroSize", "fusion",
+       [](Bench& b)
+       {
+         auto image = makeImage(b.next("fusion"));
+         image->width = 0;
+         image->height = 0;
+         b.pub_fusion_image_.publish(image);
+       },
+       "dropped (no overlay for it): image is empty (0x0)", "fusion/image"},
       {"CameraInfoOfZeroSize", "grid_projection",
        badInfo(
            [](sensor_msgs::CameraInfo& i)
@@ -559,11 +588,10 @@ std::vector<Case> cases()
       {"CloudTfNeverArrives", "dynamic_grid",
        [](Bench& b)
        {
-         // queue_size (5) clouds wait for the tf, the sixth pushes the first out.
-         for (int i = 0; i < 6; ++i)
-         {
-           b.pub_points_.publish(makeCloud(720, b.next("dynamic_grid"), "nowhere_link"));
-         }
+         // Clouds wait for the tf until more than queue_size (5) wait: one every 100 ms (a burst
+         // could overflow the subscriber's queue instead) until the first is pushed out.
+         waitFor([&] { return b.logged("dynamic_grid: dropping the scan of /bad/points"); }, kLogTimeoutS,
+                 [&] { b.pub_points_.publish(makeCloud(720, b.next("dynamic_grid"), "nowhere_link")); });
        },
        "dynamic_grid: dropping the scan of /bad/points", "grid/tf"},
       {"GridTooOld", "grid_projection",
