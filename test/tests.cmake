@@ -51,10 +51,12 @@ gvf_gtest(test_offline
   DEFINITIONS GVF_EVALUATE_TOOL="$<TARGET_FILE:evaluate>" GVF_KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>"
   DEPENDS evaluate kitti_to_bag)
 gvf_gtest(test_tools
-  SOURCES test/tools/test_bag_summary.cpp
+  SOURCES test/tools/test_bag_summary.cpp test/tools/test_tool_errors.cpp
   LINK grid_vision_fusion_offline
-  DEFINITIONS BAG_SUMMARY="$<TARGET_FILE:bag_summary>"
-  DEPENDS bag_summary)
+  DEFINITIONS BAG_SUMMARY="$<TARGET_FILE:bag_summary>" RUN_PIPELINE="$<TARGET_FILE:run_pipeline>"
+    KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>" EVALUATE="$<TARGET_FILE:evaluate>"
+    MAKE_SYNTHETIC_DRIVE="$<TARGET_FILE:make_synthetic_drive>"
+  DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive)
 
 # --- nodelets in a manager (rostest) -----------------------------------------------------------
 gvf_rostest(test_dynamic_grid_nodelet LAUNCH test/nodelets/dynamic_grid_nodelet.test
@@ -67,6 +69,8 @@ gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_no
   SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
 gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test
   SOURCES test/nodelets/test_fusion_nodelet.cpp)
+gvf_rostest(test_bad_input LAUNCH test/nodelets/bad_input.test
+  SOURCES test/nodelets/test_bad_input.cpp LINK gvf_tiny_darknet)
 gvf_rostest(test_zero_copy LAUNCH test/nodelets/zero_copy.test SOURCES test/nodelets/test_zero_copy.cpp)
 gvf_rostest(test_pipeline_equivalence LAUNCH test/nodelets/pipeline_equivalence.test
   SOURCES test/nodelets/test_pipeline_equivalence.cpp LINK grid_vision_fusion_offline grid_vision_fusion_simulation)

@@ -19,11 +19,14 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/offline/bag_errors.h"
 
 namespace
 {
@@ -117,9 +120,17 @@ int main(int argc, char** argv)
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
     rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{objects_topic, images_topic}));
+    // The frames and the video are written under temporary names and moved in place at the end,
+    // so that a failure leaves no partial output behind.
+    std::optional<grid_vision_fusion::TemporaryOutput> frames_out, video_out;
     if (!frames_dir.empty())
     {
-      std::filesystem::create_directories(frames_dir);
+      frames_out.emplace(frames_dir);
+      std::filesystem::create_directories(frames_out->temporary());
+    }
+    if (!video_path.empty())
+    {
+      video_out.emplace(video_path, ".tmp.avi");
     }
     std::map<std::string, Counts> per_class;
     std::map<std::uint32_t, TrackSummary> tracks;
@@ -172,7 +183,7 @@ int main(int argc, char** argv)
         {
           char name[32];
           std::snprintf(name, sizeof(name), "%06zu.png", images);
-          const std::string path = (std::filesystem::path(frames_dir) / name).string();
+          const std::string path = (std::filesystem::path(frames_out->temporary()) / name).string();
           if (!cv::imwrite(path, bgr))
           {
             return fail("cannot write " + path);
@@ -180,8 +191,8 @@ int main(int argc, char** argv)
         }
         if (!video_path.empty())
         {
-          if (!video.isOpened() &&
-              !video.open(video_path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, bgr.size()))
+          if (!video.isOpened() && !video.open(video_out->temporary(),
+                                               cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, bgr.size()))
           {
             return fail("cannot open the video " + video_path + " for writing");
           }
@@ -194,6 +205,15 @@ int main(int argc, char** argv)
     if (frames == 0)
     {
       return fail("no " + objects_topic + " message in " + bag_path);
+    }
+    if (frames_out)
+    {
+      frames_out->commit();
+    }
+    if (video_out && video.isOpened())
+    {
+      video.release();
+      video_out->commit();
     }
     std::cout << "\n"
               << frames << " frames of " << objects_topic << ", " << images << " overlay images of "
@@ -233,11 +253,11 @@ int main(int argc, char** argv)
   }
   catch (const rosbag::BagException& e)
   {
-    return fail("cannot read " + bag_path + ": " + e.what());
+    return fail(grid_vision_fusion::bagReadError(bag_path, e.what()));
   }
   catch (const std::exception& e)
   {
-    return fail(e.what());
+    return fail(bag_path + ": " + e.what());
   }
   return 0;
 }

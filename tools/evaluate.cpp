@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
 #include "grid_vision_fusion/evaluation/evaluation_report.h"
 #include "grid_vision_fusion/evaluation/kitti_ground_truth.h"
@@ -304,7 +305,10 @@ int run(const Options& o)
     tracking.max_longitudinal_m = o.evaluation.max_longitudinal_m;
     result.tracking = gvf::evaluateTracking(ground_truth, bag.detections, tracking);
   }
-  gvf::writeEvaluationOutputs(o.output, result, o.evaluation, ground_truth, bag.detections);
+  // Written into OUTPUT.tmp and moved into OUTPUT when complete; removed on any failure.
+  gvf::TemporaryOutput output(o.output);
+  gvf::writeEvaluationOutputs(output.temporary(), result, o.evaluation, ground_truth, bag.detections);
+  output.commit();
   std::cout << gvf::reportMarkdown(result, o.evaluation);
   std::cerr << "Wrote " << o.output
             << "/metrics.json, report.md, matches.csv, ground-truth/, detection-results/ and the plots\n";

@@ -16,6 +16,7 @@
 
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
+#include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/offline/pipeline.h"
 
 namespace gvf = grid_vision_fusion;
@@ -159,8 +160,17 @@ int run(const Options& o)
     std::cerr << "run_pipeline: warning: " << warning << "\n";
   }
 
-  const std::string tmp = o.output + ".tmp";
-  rosbag::Bag out(tmp, rosbag::bagmode::Write);
+  // Written as OUTPUT.tmp, moved to OUTPUT when complete; removed on any failure.
+  gvf::TemporaryOutput output(o.output);
+  rosbag::Bag out;
+  try
+  {
+    out.open(output.temporary(), rosbag::bagmode::Write);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot write the output bag " + o.output + ": " + e.what());
+  }
   gvf::PipelineOutputs outputs;
   outputs.objects = [&out](const gvf::DetectedObjectArray::ConstPtr& m)
   { out.write("/objects", m->header.stamp, m); };
@@ -199,11 +209,15 @@ int run(const Options& o)
   {
     bar->finish();
   }
-  out.close();
-  if (std::rename(tmp.c_str(), o.output.c_str()) != 0)
+  try
   {
-    throw std::runtime_error("cannot rename " + tmp + " to " + o.output);
+    out.close();
   }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot finish the output bag " + o.output + ": " + e.what());
+  }
+  output.commit();
 
   const gvf::PipelineStats& s = pipeline.stats();
   std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, "

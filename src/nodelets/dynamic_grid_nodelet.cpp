@@ -42,10 +42,9 @@ class DynamicGridNodelet : public nodelet::Nodelet
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   boost::mutex connect_mutex_;
-  std::mutex filter_mutex_;  // the stage, its statistics and the field-error flag
+  std::mutex filter_mutex_;  // the stage and its statistics
   std::unique_ptr<GridStage> stage_;
   std::string fixed_frame_;
-  bool field_error_reported_ = false;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -70,6 +69,7 @@ class DynamicGridNodelet : public nodelet::Nodelet
   std::size_t invalid_points_ = 0;
   std::size_t resets_ = 0;
   std::size_t tf_drops_ = 0;
+  std::size_t unusable_clouds_ = 0;
 };
 
 void DynamicGridNodelet::onInit()
@@ -202,14 +202,12 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   }
   catch (const UnusableMessage& e)
   {
-    if (!field_error_reported_)
-    {
-      NODELET_ERROR(
-          "dynamic_grid: cannot use the clouds of %s (frame '%s'): %s; they need float32 x, y, z "
-          "fields. Reported once; these clouds are dropped.",
-          sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(), e.what());
-      field_error_reported_ = true;
-    }
+    ++unusable_clouds_;
+    NODELET_ERROR_THROTTLE(kThrottleS,
+                           "dynamic_grid: cannot use the clouds of %s (frame '%s', t=%.3f): %s; they need "
+                           "float32 x, y, z fields, little-endian, and the data their size claims. Dropped.",
+                           sub_points_.getTopic().c_str(), cloud_msg->header.frame_id.c_str(),
+                           cloud_msg->header.stamp.toSec(), e.what());
     return;
   }
   catch (const tf2::TransformException& e)
@@ -280,6 +278,7 @@ void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("scans processed", scans_);
   status.add("points dropped (NaN/Inf)", invalid_points_);
   status.add("scans dropped (tf)", tf_drops_);
+  status.add("scans dropped (unusable cloud)", unusable_clouds_);
   status.add("grid resets", resets_);
   status.add("fixed frame", fixed_frame_);
 }

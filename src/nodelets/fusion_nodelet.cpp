@@ -26,6 +26,7 @@
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/fusion_stage.h"
+#include "grid_vision_fusion/ros/image_checks.h"
 
 namespace grid_vision_fusion
 {
@@ -188,6 +189,13 @@ void FusionNodelet::reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t
 
 void FusionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
 {
+  const std::string error = checkImageData(*image_msg);
+  if (!error.empty())
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS, "fusion: image on %s at t=%.3f dropped (no overlay for it): %s",
+                           sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), error.c_str());
+    return;
+  }
   std::lock_guard<std::mutex> lock(image_mutex_);
   image_cache_.push_back(image_msg);
   while (image_cache_.size() > static_cast<std::size_t>(stage_->params().image_cache_size))
@@ -213,6 +221,12 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
                           detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
                           sub_grid_.getTopic().c_str(), e.what());
     return;
+  }
+  if (!pair.tracks_reset.empty())
+  {
+    NODELET_WARN_THROTTLE(kThrottleS, "fusion: tracks reset at t=%.3f (%s): %s",
+                          detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
+                          pair.tracks_reset.c_str());
   }
   const std::vector<Detection>& detections = pair.detections;
   const FusionResult& result = pair.result;

@@ -24,6 +24,7 @@
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
+#include "grid_vision_fusion/ros/image_checks.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
 
@@ -282,6 +283,14 @@ void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr
 
 void GridProjectionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
 {
+  const std::string error = checkImageData(*image_msg);
+  if (!error.empty())
+  {
+    NODELET_ERROR_THROTTLE(kThrottleS,
+                           "grid_projection: image on %s at t=%.3f dropped (no overlay for it): %s",
+                           sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), error.c_str());
+    return;
+  }
   {
     std::lock_guard<std::mutex> lock(overlay_mutex_);
     images_.push_back(image_msg);

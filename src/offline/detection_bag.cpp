@@ -1,5 +1,7 @@
 #include "grid_vision_fusion/offline/detection_bag.h"
 
+#include "grid_vision_fusion/offline/bag_errors.h"
+
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
@@ -77,7 +79,7 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
   }
   catch (const rosbag::BagException& e)
   {
-    throw std::runtime_error(bag_path + ": cannot open the bag: " + e.what());
+    throw std::runtime_error(bagReadError(bag_path, e.what()));
   }
   DetectionBagResult result;
   try
@@ -174,7 +176,7 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
   }
   catch (const rosbag::BagException& e)
   {
-    throw std::runtime_error(bag_path + ": cannot read the bag: " + e.what());
+    throw std::runtime_error(bagReadError(bag_path, e.what()));
   }
   return result;
 }

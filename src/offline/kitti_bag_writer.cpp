@@ -1,5 +1,7 @@
 #include "grid_vision_fusion/offline/kitti_bag_writer.h"
 
+#include "grid_vision_fusion/cli/temporary_output.h"
+
 #include <cv_bridge/cv_bridge.h>
 #include <ros/message_traits.h>
 #include <rosbag/bag.h>
@@ -131,26 +133,6 @@ geometry_msgs::Quaternion toQuaternionMsg(const Eigen::Matrix3d& rotation)
   return msg;
 }
 
-/// Removes the temporary bag unless release() was called.
-class TemporaryFileGuard
-{
-public:
-  explicit TemporaryFileGuard(std::string path) : path_(std::move(path)) {}
-  ~TemporaryFileGuard()
-  {
-    if (!path_.empty())
-    {
-      std::error_code ignored;
-      fs::remove(path_, ignored);
-    }
-  }
-  TemporaryFileGuard(const TemporaryFileGuard&) = delete;
-  TemporaryFileGuard& operator=(const TemporaryFileGuard&) = delete;
-  void release() { path_.clear(); }
-
-private:
-  std::string path_;
-};
 }  // namespace
 
 KittiCameraNames kittiCameraNames(int camera)
@@ -511,8 +493,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
     start = std::min(start, toRosTime(stamps[static_cast<std::size_t>(first)]));
   }
 
-  const std::string temporary = options.output_bag + ".tmp";
-  TemporaryFileGuard guard(temporary);
+  TemporaryOutput output(options.output_bag);
+  const std::string& temporary = output.temporary();
   KittiBagSummary summary;
   summary.output_bag = options.output_bag;
   {
@@ -594,13 +576,7 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
       throw std::runtime_error("cannot finish bag " + temporary + ": " + e.what());
     }
   }
-  fs::rename(temporary, options.output_bag, error);
-  if (error)
-  {
-    throw std::runtime_error("cannot move " + temporary + " to " + options.output_bag + ": " +
-                             error.message());
-  }
-  guard.release();
+  output.commit();
   return summary;
 }
 

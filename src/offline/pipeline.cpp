@@ -9,6 +9,7 @@
 #include <chrono>
 #include <fstream>
 
+#include "grid_vision_fusion/offline/bag_errors.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros/grid_conversions.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
@@ -386,8 +387,31 @@ void Pipeline::tryFuse(const ros::Time& stamp)
   }
 }
 
+namespace
+{
+BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& input_bag,
+                                        const PipelineTopics& topics,
+                                        const std::function<void(std::size_t, std::size_t)>& progress);
+}  // namespace
+
 BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag, const PipelineTopics& topics,
                                const std::function<void(std::size_t, std::size_t)>& progress)
+{
+  try
+  {
+    return runPipelineOnBagUnchecked(pipeline, input_bag, topics, progress);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(bagReadError(input_bag, e.what()));
+  }
+}
+
+namespace
+{
+BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& input_bag,
+                                        const PipelineTopics& topics,
+                                        const std::function<void(std::size_t, std::size_t)>& progress)
 {
   const auto start = std::chrono::steady_clock::now();
   BagRunSummary summary;
@@ -470,6 +494,7 @@ BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag,
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
+}  // namespace
 
 double residentMemoryMiB()
 {

@@ -5,6 +5,7 @@
 #include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
+#include "grid_vision_fusion/ros/image_checks.h"
 
 namespace grid_vision_fusion
 {
@@ -36,6 +37,11 @@ std::vector<Detection> DetectorStage::detect(const sensor_msgs::Image::ConstPtr&
   if (detector_->needsPixels())
   {
     input.format = pixelFormatFromEncoding(image->encoding);
+    const std::string error = checkImageData(*image);
+    if (!error.empty())
+    {
+      throw std::invalid_argument(error);
+    }
     view = cv_bridge::toCvShare(image);
     input.pixels = view->image;
   }

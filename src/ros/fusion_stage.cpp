@@ -24,6 +24,11 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   {
     throw std::invalid_argument("projected grid: " + grid_error);
   }
+  if (detections.detections.size() > kMaxFusionDetections)
+  {
+    throw std::invalid_argument(std::to_string(detections.detections.size()) + " detections, more than the " +
+                                std::to_string(kMaxFusionDetections) + " a pair may hold");
+  }
   FusedPair pair;
   pair.detections = detectionsFromMsg(detections);
   const std::string input_error = checkFusionInputs(
@@ -41,6 +46,19 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   }
   if (params_.tracking)
   {
+    const double stamp = detections.header.stamp.toSec();
+    const double gap = stamp - last_stamp_;
+    if (has_stamp_ && gap < 0.0)
+    {
+      pair.tracks_reset = "time jumped backwards by " + std::to_string(-gap) + " s";
+    }
+    else if (has_stamp_ && gap > params_.tracker.max_gap)
+    {
+      pair.tracks_reset = "gap of " + std::to_string(gap) + " s since the last pair exceeds track_max_gap (" +
+                          std::to_string(params_.tracker.max_gap) + " s)";
+    }
+    has_stamp_ = true;
+    last_stamp_ = stamp;
     trackObjects(tracker_, detections.header.stamp.toSec(), pair.detections, pair.result);
   }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/kitti/kitti_raw.h"
 #include "grid_vision_fusion/simulation/synthetic_camera.h"
 
@@ -346,7 +347,10 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
   drive_name << options.date << "_drive_" << std::setw(4) << std::setfill('0') << options.drive_number
              << "_sync";
   const fs::path day_dir = fs::path(options.output_root) / options.date;
-  const fs::path drive_dir = day_dir / drive_name.str();
+  // The drive is written into <drive>.tmp and moved in place when complete: a failure leaves
+  // neither a partial drive nor the temporary behind, and a drive already there untouched.
+  TemporaryOutput output((day_dir / drive_name.str()).string());
+  const fs::path drive_dir = output.temporary();
   const fs::path image_dir = drive_dir / kCameraName / "data";
   const fs::path velo_dir = drive_dir / "velodyne_points" / "data";
   const fs::path oxts_dir = drive_dir / "oxts" / "data";
@@ -413,7 +417,7 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
 
   std::mt19937 rng(scenario.seed);
   SyntheticDriveSummary summary;
-  summary.drive_dir = drive_dir.string();
+  summary.drive_dir = output.path();
   summary.frames = frames;
   std::vector<TrackletTrack> tracklets(scenario.actors.size());
   for (int frame = 0; frame < frames; ++frame)
@@ -502,6 +506,7 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
   closeChecked(velo_end, velo_end_path);
   closeChecked(oxts_stamps, oxts_stamps_path);
   writeTracklets(drive_dir / "tracklet_labels.xml", scenario.actors, tracklets);
+  output.commit();
   return summary;
 }
 

@@ -181,8 +181,8 @@ struct BagRunSummary
 };
 
 /// Reads `input_bag` in time order, feeds `pipeline`, calls `progress(done, total)` per message
-/// (may be empty). @throws rosbag::BagException (unreadable bag), std::runtime_error when none
-/// of the input topics is in the bag.
+/// (may be empty). @throws std::runtime_error naming the bag when it cannot be read (with the
+/// `rosbag reindex` hint of bagReadError()) or holds none of the input topics.
 BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag, const PipelineTopics& topics,
                                const std::function<void(std::size_t, std::size_t)>& progress = nullptr);
 

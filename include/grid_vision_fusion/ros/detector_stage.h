@@ -27,7 +27,8 @@ public:
   std::int64_t frameIndex(const sensor_msgs::Image& image) { return detector_->frameIndex(image.header.seq); }
 
   /// The detections of `image` (viewed without a copy when the detector needs its pixels).
-  /// @throws std::invalid_argument for an unsupported encoding; what Detector::detect() throws.
+  /// @throws std::invalid_argument for an unsupported encoding or an image without the data its
+  ///         header claims (checkImageData()); what Detector::detect() throws.
   std::vector<Detection> detect(const sensor_msgs::Image::ConstPtr& image, std::int64_t frame_index);
 
   /// Changes the score and NMS thresholds. @throws std::invalid_argument outside [0, 1].

@@ -13,12 +13,20 @@
 
 namespace grid_vision_fusion
 {
+/// The most detections one pair may hold. A detector gives tens per image; many more would make
+/// the fusion regions and the tracker's assignment (cubic in the count) run for minutes and
+/// take gigabytes, so such a pair is refused.
+constexpr std::size_t kMaxFusionDetections = 1000;
+
 /// A fused detection / projected-grid pair.
 struct FusedPair
 {
   std::vector<Detection> detections;  ///< the boxes of the Detection2DArray
   FusionResult result;                ///< the objects as published (tracked when tracking is on)
   DetectedObjectArray::Ptr objects;   ///< the message (stamp of the image, grid frame)
+  /// With tracking: why the tracks were dropped before this pair (time going backwards, a gap
+  /// above track_max_gap); empty when they were kept.
+  std::string tracks_reset;
 };
 
 /// The fusion with its parameters, and the tracker that carries the objects from pair to pair.
@@ -33,7 +41,8 @@ public:
   /// (estimateCentres() unless params.fusion.position is kMedian), with tracking the tracker
   /// (only objects of confirmed tracks stay, with the track's id, motion, position and
   /// velocity), then objectsToMsg(). Pairs must come in stamp order.
-  /// @throws std::invalid_argument naming what is wrong with the pair (the tracker is untouched).
+  /// @throws std::invalid_argument naming what is wrong with the pair, e.g. more than
+  ///         kMaxFusionDetections detections (the tracker is untouched).
   FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid);
 
   /// Replaces the fusion configuration (dynamic_reconfigure). @throws std::invalid_argument
@@ -48,6 +57,8 @@ public:
 private:
   FusionParams params_;
   Tracker tracker_;
+  bool has_stamp_ = false;
+  double last_stamp_ = 0.0;  ///< of the last pair tracked
 };
 
 }  // namespace grid_vision_fusion

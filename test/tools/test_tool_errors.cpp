@@ -1,0 +1,247 @@
+// Issue 13: every tool fails with a non-zero exit status and a message naming the file at fault,
+// leaves no partial output (no .tmp) behind, and leaves an output already there intact. The
+// inputs come from the tools themselves: a two-frame synthetic drive (make_synthetic_drive), its
+// bag (kitti_to_bag), and that bag cut in half as a recording cut short leaves it.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+
+namespace
+{
+namespace fs = std::filesystem;
+
+struct Result
+{
+  int status = 0;
+  std::string output;  ///< stdout and stderr
+};
+
+Result run(const std::string& command)
+{
+  Result result;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
+  char buffer[512];
+  while (pipe && std::fgets(buffer, sizeof(buffer), pipe.get()))
+  {
+    result.output += buffer;
+  }
+  result.status = pclose(pipe.release());
+  return result;
+}
+
+std::string readFile(const fs::path& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void writeFile(const fs::path& path, const std::string& text)
+{
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+/// Paths under `dir` whose name holds ".tmp".
+std::string temporariesUnder(const fs::path& dir)
+{
+  std::string found;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+  {
+    if (entry.path().filename().string().find(".tmp") != std::string::npos)
+    {
+      found += " " + entry.path().string();
+    }
+  }
+  return found;
+}
+
+const std::string kPrecious = "an output of an earlier run\n";
+
+class ToolErrors : public ::testing::Test
+{
+protected:
+  static void SetUpTestSuite()
+  {
+    root_ = fs::path(testing::TempDir()) / "tool_errors";
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    const Result drive = run(std::string(MAKE_SYNTHETIC_DRIVE) + " --output " + (root_ / "kitti").string() +
+                             " --scenario " + GVF_SOURCE_DIR + "/test/data/kitti_replay_scenario.yaml" +
+                             " --calibration " + GVF_SOURCE_DIR + "/data/calibration/2011_09_26 --frames 2");
+    ASSERT_EQ(drive.status, 0) << drive.output;
+    drive_ = root_ / "kitti" / "2011_09_26" / "2011_09_26_drive_9001_sync";
+    full_bag_ = root_ / "full.bag";
+    const Result bag =
+        run(std::string(KITTI_TO_BAG) + " --quiet " + drive_.string() + " " + full_bag_.string());
+    ASSERT_EQ(bag.status, 0) << bag.output;
+    // The first half of the bag, as a recording cut short leaves it (no index at the end).
+    half_bag_ = root_ / "half.bag";
+    const std::string bytes = readFile(full_bag_);
+    ASSERT_GT(bytes.size(), 1000U);
+    writeFile(half_bag_, bytes.substr(0, bytes.size() / 2));
+  }
+
+  void SetUp() override
+  {
+    work_ = root_ / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    fs::remove_all(work_);
+    fs::create_directories(work_);
+  }
+
+  /// The checks every failure must pass.
+  void expectCleanFailure(const Result& result, const std::string& named_file, const fs::path& kept_output)
+  {
+    EXPECT_NE(result.status, 0) << result.output;
+    EXPECT_NE(result.output.find(named_file), std::string::npos)
+        << "the message does not name " << named_file << ":\n"
+        << result.output;
+    EXPECT_EQ(temporariesUnder(work_), "") << "left behind";
+    EXPECT_EQ(readFile(kept_output), kPrecious) << kept_output << " was changed";
+  }
+
+  static fs::path root_, drive_, full_bag_, half_bag_;
+  fs::path work_;
+};
+
+fs::path ToolErrors::root_, ToolErrors::drive_, ToolErrors::full_bag_, ToolErrors::half_bag_;
+
+std::string replayArgs(const fs::path& drive)
+{
+  return " --config-dir " GVF_SOURCE_DIR "/config --backend replay --replay-directory " +
+         (drive / "label_2").string();
+}
+
+TEST_F(ToolErrors, RunPipelineNamesATruncatedBagAndSuggestsReindex)
+{
+  const fs::path output = work_ / "half_out.bag";
+  writeFile(output, kPrecious);
+  const Result result = run(std::string(RUN_PIPELINE) + " --bag " + half_bag_.string() + " --output " +
+                            output.string() + replayArgs(drive_));
+  expectCleanFailure(result, half_bag_.string(), output);
+  EXPECT_NE(result.output.find("rosbag reindex " + half_bag_.string()), std::string::npos) << result.output;
+}
+
+TEST_F(ToolErrors, RunPipelineNamesAMissingBag)
+{
+  const fs::path output = work_ / "out.bag";
+  writeFile(output, kPrecious);
+  const fs::path missing = work_ / "missing.bag";
+  const Result result = run(std::string(RUN_PIPELINE) + " --bag " + missing.string() + " --output " +
+                            output.string() + replayArgs(drive_));
+  expectCleanFailure(result, missing.string() + ": no such file", output);
+}
+
+TEST_F(ToolErrors, RunPipelineNamesAnUnwritableOutput)
+{
+  const fs::path kept = work_ / "kept.bag";
+  writeFile(kept, kPrecious);
+  const fs::path output = work_ / "no_such_folder" / "out.bag";
+  const Result result = run(std::string(RUN_PIPELINE) + " --bag " + full_bag_.string() + " --output " +
+                            output.string() + replayArgs(drive_));
+  expectCleanFailure(result, output.string(), kept);
+  EXPECT_FALSE(fs::exists(output.parent_path()));
+}
+
+TEST_F(ToolErrors, KittiToBagNamesAMissingDrive)
+{
+  const fs::path output = work_ / "out.bag";
+  writeFile(output, kPrecious);
+  const fs::path missing = work_ / "no_drive";
+  const Result result =
+      run(std::string(KITTI_TO_BAG) + " --quiet " + missing.string() + " " + output.string());
+  expectCleanFailure(result, missing.string(), output);
+}
+
+TEST_F(ToolErrors, KittiToBagNamesACorruptScanAndRemovesThePartialBag)
+{
+  // A copy of the drive whose second scan is cut to 5 bytes: the bag is half written when the
+  // conversion fails.
+  const fs::path day = work_ / "2011_09_26";
+  fs::copy(drive_.parent_path(), day, fs::copy_options::recursive);
+  const fs::path drive = day / drive_.filename();
+  const fs::path scan = drive / "velodyne_points" / "data" / "0000000001.bin";
+  ASSERT_TRUE(fs::exists(scan));
+  fs::resize_file(scan, 5);
+  const fs::path output = work_ / "out.bag";
+  writeFile(output, kPrecious);
+  const Result result = run(std::string(KITTI_TO_BAG) + " --quiet " + drive.string() + " " + output.string());
+  expectCleanFailure(result, scan.string(), output);
+}
+
+TEST_F(ToolErrors, EvaluateNamesATruncatedBag)
+{
+  const fs::path output = work_ / "evaluation";
+  writeFile(output / "metrics.json", kPrecious);
+  const Result result = run(std::string(EVALUATE) + " --drive " + drive_.string() + " --detections " +
+                            half_bag_.string() + " --output " + output.string());
+  expectCleanFailure(result, half_bag_.string(), output / "metrics.json");
+  EXPECT_NE(result.output.find("rosbag reindex " + half_bag_.string()), std::string::npos) << result.output;
+  EXPECT_EQ(std::distance(fs::directory_iterator(output), fs::directory_iterator()), 1) << "files added";
+}
+
+TEST_F(ToolErrors, EvaluateNamesAMissingDrive)
+{
+  const fs::path output = work_ / "evaluation";
+  writeFile(output / "metrics.json", kPrecious);
+  const fs::path missing = work_ / "no_drive";
+  const Result result = run(std::string(EVALUATE) + " --drive " + missing.string() + " --detections " +
+                            full_bag_.string() + " --output " + output.string());
+  expectCleanFailure(result, missing.string(), output / "metrics.json");
+}
+
+TEST_F(ToolErrors, MakeSyntheticDriveNamesAMissingScenario)
+{
+  const fs::path kept = work_ / "kitti" / "2011_09_26" / "2011_09_26_drive_9001_sync" / "marker.txt";
+  writeFile(kept, kPrecious);
+  const fs::path missing = work_ / "no_scenario.yaml";
+  const Result result =
+      run(std::string(MAKE_SYNTHETIC_DRIVE) + " --output " + (work_ / "kitti").string() + " --scenario " +
+          missing.string() + " --calibration " + GVF_SOURCE_DIR + "/data/calibration/2011_09_26 --frames 2");
+  expectCleanFailure(result, missing.string(), kept);
+}
+
+TEST_F(ToolErrors, MakeSyntheticDriveRemovesThePartialDrive)
+{
+  // The day folder's calibration file is a folder: copying the calibration fails after the drive
+  // folders were created.
+  const fs::path day = work_ / "kitti" / "2011_09_26";
+  const fs::path kept = day / "2011_09_26_drive_9001_sync" / "marker.txt";
+  writeFile(kept, kPrecious);
+  fs::create_directories(day / "calib_cam_to_cam.txt");
+  const Result result = run(std::string(MAKE_SYNTHETIC_DRIVE) + " --output " + (work_ / "kitti").string() +
+                            " --scenario " + GVF_SOURCE_DIR + "/test/data/kitti_replay_scenario.yaml" +
+                            " --calibration " + GVF_SOURCE_DIR + "/data/calibration/2011_09_26 --frames 2");
+  expectCleanFailure(result, "calib_cam_to_cam.txt", kept);
+  EXPECT_EQ(std::distance(fs::directory_iterator(kept.parent_path()), fs::directory_iterator()), 1)
+      << "the earlier drive was changed";
+}
+
+TEST_F(ToolErrors, BagSummaryNamesATruncatedBag)
+{
+  const fs::path video = work_ / "overlay.avi";
+  writeFile(video, kPrecious);
+  const Result result = run(std::string(BAG_SUMMARY) + " --bag " + half_bag_.string() + " --video " +
+                            video.string() + " --frames-dir " + (work_ / "frames").string());
+  expectCleanFailure(result, half_bag_.string(), video);
+  EXPECT_NE(result.output.find("rosbag reindex " + half_bag_.string()), std::string::npos) << result.output;
+  EXPECT_FALSE(fs::exists(work_ / "frames"));
+}
+
+TEST_F(ToolErrors, BagSummaryNamesABagWithoutObjects)
+{
+  // The bag reads fine but holds no /objects: the frames exported so far must not stay.
+  const fs::path video = work_ / "overlay.avi";
+  writeFile(video, kPrecious);
+  const Result result = run(std::string(BAG_SUMMARY) + " --bag " + full_bag_.string() +
+                            " --images /kitti/camera_color_left/image_raw --video " + video.string() +
+                            " --frames-dir " + (work_ / "frames").string());
+  expectCleanFailure(result, full_bag_.string(), video);
+  EXPECT_FALSE(fs::exists(work_ / "frames"));
+}
+
+}  // namespace
