@@ -164,9 +164,14 @@ Eigen::Isometry3d rigidTransform(const Eigen::Matrix3d& rotation, const Eigen::V
 
 KittiRawCalibration KittiRawCalibration::readDirectory(const std::string& directory)
 {
-  return fromFiles(KittiCalibrationFile::read(joinPath(directory, "calib_cam_to_cam.txt")),
-                   KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt")),
-                   KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt")));
+  // One after the other, so that the first missing file is the one named.
+  const KittiCalibrationFile cam_to_cam =
+      KittiCalibrationFile::read(joinPath(directory, "calib_cam_to_cam.txt"));
+  const KittiCalibrationFile velo_to_cam =
+      KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt"));
+  const KittiCalibrationFile imu_to_velo =
+      KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt"));
+  return fromFiles(cam_to_cam, velo_to_cam, imu_to_velo);
 }
 
 KittiRawCalibration KittiRawCalibration::fromFiles(const KittiCalibrationFile& cam_to_cam,
