@@ -124,3 +124,10 @@ set(GVF_SUITE_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/suite-scenario_s
 catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_short.xml"
   COMMAND "${PROJECT_SOURCE_DIR}/scripts/evaluate_suite.sh --devel ${CATKIN_DEVEL_PREFIX} --jobs 2 --scenario-dir ${PROJECT_SOURCE_DIR}/test/data/suite_short --thresholds ${PROJECT_SOURCE_DIR}/test/data/suite_short/thresholds.json --output ${CMAKE_CURRENT_BINARY_DIR}/scenario_suite_short --junit ${GVF_SUITE_RESULT}"
   DEPENDENCIES ${GVF_SUITE_TOOLS})
+
+# --- fuzzing (scripts/fuzz.sh): the harnesses of fuzz/ over their inputs in test/data/fuzz ------
+file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
+gvf_gtest(test_fuzz_corpus
+  SOURCES test/fuzz/test_fuzz_corpus.cpp ${GVF_FUZZ_HARNESS_SOURCES}
+  LINK grid_vision_fusion_ros grid_vision_fusion_simulation
+  DEFINITIONS GVF_FUZZ_CORPUS_TEST)

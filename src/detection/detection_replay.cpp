@@ -10,10 +10,17 @@ namespace grid_vision_fusion
 {
 namespace
 {
-/// Whether `pattern` holds exactly one integer conversion (%d or %i with flags and width) and
-/// no other conversion than "%%".
+/// Longest file pattern: with a width of at most two digits, every file name fits pathOf()'s buffer.
+constexpr std::size_t kMaxPatternLength = 128;
+
+/// Whether `pattern` holds exactly one integer conversion (%d or %i with flags and a width of at
+/// most two digits) and no other conversion than "%%".
 bool isFramePattern(const std::string& pattern)
 {
+  if (pattern.size() > kMaxPatternLength)
+  {
+    return false;
+  }
   int conversions = 0;
   for (std::size_t i = 0; i < pattern.size(); ++i)
   {
@@ -31,9 +38,14 @@ bool isFramePattern(const std::string& pattern)
     {
       ++i;
     }
+    const std::size_t width_begin = i;
     while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i])))
     {
       ++i;
+    }
+    if (i - width_begin > 2)
+    {
+      return false;
     }
     if (i >= pattern.size() || (pattern[i] != 'd' && pattern[i] != 'i'))
     {
@@ -80,8 +92,9 @@ void DetectionReplayConfig::validate() const
   if (!isFramePattern(file_pattern))
   {
     throw std::invalid_argument(
-        "replay file_pattern must hold exactly one integer conversion such as %06d, got \"" + file_pattern +
-        "\"");
+        "replay file_pattern must hold exactly one integer conversion such as %06d (width at most 99, "
+        "pattern at most " +
+        std::to_string(kMaxPatternLength) + " characters), got \"" + file_pattern + "\"");
   }
   if (index_source == FrameIndexSource::kCounter && first_index < 0)
   {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace grid_vision_fusion
@@ -40,7 +41,8 @@ int toInt(const std::string& token, std::size_t field, const std::string& source
   errno = 0;
   char* end = nullptr;
   const long value = std::strtol(token.c_str(), &end, 10);
-  if (end == token.c_str() || *end != '\0' || errno == ERANGE)
+  if (end == token.c_str() || *end != '\0' || errno == ERANGE || value < std::numeric_limits<int>::min() ||
+      value > std::numeric_limits<int>::max())
   {
     fail(source, line,
          std::string("field ") + std::to_string(field + 1) + " (" + kFieldNames[field] +

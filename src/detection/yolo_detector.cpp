@@ -82,13 +82,8 @@ struct CfgSection
   std::map<std::string, std::string> values;
 };
 
-std::vector<CfgSection> readCfgSections(const std::string& path)
+std::vector<CfgSection> readCfgSections(std::istream& file, const std::string& path)
 {
-  std::ifstream file(path);
-  if (!file)
-  {
-    throw YoloModelError(path + ": cannot open the Darknet cfg file");
-  }
   std::vector<CfgSection> sections;
   std::string text;
   std::size_t line = 0;
@@ -165,13 +160,29 @@ std::vector<int> cfgIntList(const CfgSection& section, const std::string& key, c
   return values;
 }
 
-/// Output shape of a Darknet layer.
+/// Output shape of a Darknet layer, in 64 bits so that no layer arithmetic overflows: every
+/// dimension is at most kMaxLayerDimension, every cfg value an int.
 struct LayerShape
 {
-  int channels = 0;
-  int height = 0;
-  int width = 0;
+  std::int64_t channels = 0;
+  std::int64_t height = 0;
+  std::int64_t width = 0;
 };
+
+/// Largest channel count, height or width of a layer output; far above any real network.
+constexpr std::int64_t kMaxLayerDimension = std::int64_t{1} << 20;
+/// Largest parameter count of a cfg (a 256 GiB weights file); far above any real network.
+constexpr std::size_t kMaxParameters = std::size_t{1} << 36;
+
+/// a · b for parameter counts. @throws YoloModelError (naming `where`) beyond kMaxParameters.
+std::size_t parameterProduct(std::size_t a, std::size_t b, const std::string& where)
+{
+  if (b != 0 && a > kMaxParameters / b)
+  {
+    throw YoloModelError(where + "needs more than " + std::to_string(kMaxParameters) + " parameters");
+  }
+  return a * b;
+}
 
 }  // namespace
 
@@ -277,7 +288,17 @@ void YoloDetectorConfig::validate() const
 
 DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
 {
-  const std::vector<CfgSection> sections = readCfgSections(cfg_path);
+  std::ifstream file(cfg_path);
+  if (!file)
+  {
+    throw YoloModelError(cfg_path + ": cannot open the Darknet cfg file");
+  }
+  return parseDarknetCfg(file, cfg_path);
+}
+
+DarknetCfgInfo parseDarknetCfg(std::istream& input, const std::string& cfg_path)
+{
+  const std::vector<CfgSection> sections = readCfgSections(input, cfg_path);
   if (sections.empty() || (sections.front().name != "net" && sections.front().name != "network"))
   {
     throw YoloModelError(cfg_path + ": not a Darknet cfg (the first section must be [net])");
@@ -291,6 +312,13 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
   {
     throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
                          ": [net] needs positive width, height and channels");
+  }
+  if (info.input_width > kMaxLayerDimension || info.input_height > kMaxLayerDimension ||
+      info.input_channels > kMaxLayerDimension)
+  {
+    throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
+                         ": [net] width, height and channels must be at most " +
+                         std::to_string(kMaxLayerDimension));
   }
 
   std::vector<LayerShape> shapes;
@@ -328,23 +356,30 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
         throw YoloModelError(where + "needs positive filters, size, stride and groups dividing the " +
                              std::to_string(previous.channels) + " input channels");
       }
-      const std::size_t weights = static_cast<std::size_t>(filters) *
-                                  static_cast<std::size_t>(previous.channels / groups) *
-                                  static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+      const std::size_t weights = parameterProduct(
+          parameterProduct(static_cast<std::size_t>(filters),
+                           static_cast<std::size_t>(previous.channels / groups), where),
+          parameterProduct(static_cast<std::size_t>(size), static_cast<std::size_t>(size), where), where);
       info.blocks.push_back({filters, weights, batch_normalize});
       info.parameters += static_cast<std::size_t>(filters) * (batch_normalize ? 4 : 1) + weights;
-      out = {filters, (previous.height + 2 * padding - size) / stride + 1,
-             (previous.width + 2 * padding - size) / stride + 1};
+      out = {filters, (previous.height + 2 * std::int64_t{padding} - size) / stride + 1,
+             (previous.width + 2 * std::int64_t{padding} - size) / stride + 1};
     }
     else if (s.name == "connected")
     {
       const int outputs = cfgInt(s, "output", 1, cfg_path);
       const bool batch_normalize = cfgInt(s, "batch_normalize", 0, cfg_path) != 0;
-      const std::size_t inputs = static_cast<std::size_t>(previous.channels) *
-                                 static_cast<std::size_t>(previous.height) *
-                                 static_cast<std::size_t>(previous.width);
-      info.blocks.push_back({outputs, static_cast<std::size_t>(outputs) * inputs, batch_normalize});
-      info.parameters += static_cast<std::size_t>(outputs) * (inputs + (batch_normalize ? 4 : 1));
+      const std::size_t inputs =
+          parameterProduct(parameterProduct(static_cast<std::size_t>(previous.channels),
+                                            static_cast<std::size_t>(previous.height), where),
+                           static_cast<std::size_t>(previous.width), where);
+      if (outputs <= 0)
+      {
+        throw YoloModelError(where + "output must be positive");
+      }
+      const std::size_t weights = parameterProduct(static_cast<std::size_t>(outputs), inputs, where);
+      info.blocks.push_back({outputs, weights, batch_normalize});
+      info.parameters += weights + static_cast<std::size_t>(outputs) * (batch_normalize ? 4 : 1);
       out = {outputs, 1, 1};
     }
     else if (s.name == "maxpool")
@@ -356,8 +391,8 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
       {
         throw YoloModelError(where + "needs positive size and stride");
       }
-      out = {previous.channels, (previous.height + padding - size) / stride + 1,
-             (previous.width + padding - size) / stride + 1};
+      out = {previous.channels, (previous.height + std::int64_t{padding} - size) / stride + 1,
+             (previous.width + std::int64_t{padding} - size) / stride + 1};
     }
     else if (s.name == "avgpool")
     {
@@ -371,14 +406,15 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
         throw YoloModelError(where + "stride must not be 0");
       }
       out = stride > 0 ? LayerShape{previous.channels, previous.height * stride, previous.width * stride}
-                       : LayerShape{previous.channels, previous.height / -stride, previous.width / -stride};
+                       : LayerShape{previous.channels, previous.height / -std::int64_t{stride},
+                                    previous.width / -std::int64_t{stride}};
     }
     else if (s.name == "reorg")
     {
       const int stride = cfgInt(s, "stride", 1, cfg_path);
-      if (stride <= 0)
+      if (stride <= 0 || stride > previous.height || stride > previous.width)
       {
-        throw YoloModelError(where + "stride must be positive");
+        throw YoloModelError(where + "stride must be positive and at most the input's height and width");
       }
       out = {previous.channels * stride * stride, previous.height / stride, previous.width / stride};
     }
@@ -424,6 +460,13 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
     {
       throw YoloModelError(where + "unsupported layer type");
     }
+    if (out.channels > kMaxLayerDimension || out.height > kMaxLayerDimension ||
+        out.width > kMaxLayerDimension)
+    {
+      throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
+                           std::to_string(out.height) + "x" + std::to_string(out.width) +
+                           " is too large (limit " + std::to_string(kMaxLayerDimension) + " per dimension)");
+    }
     if (out.channels <= 0 || out.height <= 0 || out.width <= 0)
     {
       throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
@@ -438,11 +481,18 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
 std::size_t checkDarknetWeights(const std::string& weights_path, const std::string& cfg_path,
                                 const DarknetCfgInfo& info)
 {
-  std::ifstream file(weights_path, std::ios::binary | std::ios::ate);
+  std::ifstream file(weights_path, std::ios::binary);
   if (!file)
   {
     throw YoloModelError(weights_path + ": cannot open the Darknet weights file");
   }
+  return checkDarknetWeights(file, weights_path, cfg_path, info);
+}
+
+std::size_t checkDarknetWeights(std::istream& file, const std::string& weights_path,
+                                const std::string& cfg_path, const DarknetCfgInfo& info)
+{
+  file.seekg(0, std::ios::end);
   const std::streamoff file_size = file.tellg();
   file.seekg(0);
   std::int32_t version[3] = {0, 0, 0};
@@ -453,9 +503,10 @@ std::size_t checkDarknetWeights(const std::string& weights_path, const std::stri
                          " bytes, shorter than its header");
   }
   // As Darknet and OpenCV's importer: `seen` is 64 bits from version 0.2 on, 32 bits before.
+  // In 64 bits: a header of any version, however large, must not overflow.
+  const std::int64_t major_minor = static_cast<std::int64_t>(version[0]) * 10 + version[1];
   const std::size_t header =
-      3 * sizeof(std::int32_t) +
-      ((version[0] * 10 + version[1]) >= 2 ? sizeof(std::int64_t) : sizeof(std::int32_t));
+      3 * sizeof(std::int32_t) + (major_minor >= 2 ? sizeof(std::int64_t) : sizeof(std::int32_t));
   const std::size_t expected = header + sizeof(float) * info.parameters;
   const auto actual = static_cast<std::size_t>(file_size);
   if (actual != expected)
@@ -475,8 +526,13 @@ std::vector<std::string> readClassNames(const std::string& path)
   {
     throw YoloModelError(path + ": cannot open the class names file");
   }
+  return parseClassNames(file, path);
+}
+
+std::vector<std::string> parseClassNames(std::istream& input, const std::string& path)
+{
   std::vector<std::string> names;
-  for (std::string line; std::getline(file, line);)
+  for (std::string line; std::getline(input, line);)
   {
     const std::string name = trim(line);
     if (!name.empty())

@@ -10,6 +10,8 @@ namespace grid_vision_fusion
 namespace
 {
 constexpr double kRotationTolerance = 1e-4;
+/// Largest width or height of a rectified image (S_rect_0i) [px].
+constexpr int kMaxImageSize = 1 << 20;
 
 std::string trim(const std::string& text)
 {
@@ -162,9 +164,21 @@ Eigen::Isometry3d rigidTransform(const Eigen::Matrix3d& rotation, const Eigen::V
 
 KittiRawCalibration KittiRawCalibration::readDirectory(const std::string& directory)
 {
-  KittiRawCalibration calibration;
+  // One after the other, so that the first missing file is the one named.
   const KittiCalibrationFile cam_to_cam =
       KittiCalibrationFile::read(joinPath(directory, "calib_cam_to_cam.txt"));
+  const KittiCalibrationFile velo_to_cam =
+      KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt"));
+  const KittiCalibrationFile imu_to_velo =
+      KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt"));
+  return fromFiles(cam_to_cam, velo_to_cam, imu_to_velo);
+}
+
+KittiRawCalibration KittiRawCalibration::fromFiles(const KittiCalibrationFile& cam_to_cam,
+                                                   const KittiCalibrationFile& velo_to_cam,
+                                                   const KittiCalibrationFile& imu_to_velo)
+{
+  KittiRawCalibration calibration;
   for (int i = 0; i < 4; ++i)
   {
     const std::string suffix = "_0" + std::to_string(i);
@@ -174,19 +188,16 @@ KittiRawCalibration KittiRawCalibration::readDirectory(const std::string& direct
                        cam_to_cam.source() + ": R_rect" + suffix)
             .linear();
     const std::vector<double> size = cam_to_cam.values("S_rect" + suffix, 2);
-    if (!(size[0] >= 1.0 && size[1] >= 1.0))
+    if (!(size[0] >= 1.0 && size[1] >= 1.0 && size[0] <= kMaxImageSize && size[1] <= kMaxImageSize))
     {
       throw std::runtime_error("KITTI calibration file " + cam_to_cam.source() + ": key S_rect" + suffix +
-                               " is not a positive image size");
+                               " is not a positive image size of at most " + std::to_string(kMaxImageSize) +
+                               " px");
     }
     calibration.image_size[static_cast<std::size_t>(i)] = {static_cast<std::uint32_t>(std::lround(size[0])),
                                                            static_cast<std::uint32_t>(std::lround(size[1]))};
   }
-  const KittiCalibrationFile velo_to_cam =
-      KittiCalibrationFile::read(joinPath(directory, "calib_velo_to_cam.txt"));
   calibration.cam0_from_velo = rigidFromKeys(velo_to_cam, "R", "T");
-  const KittiCalibrationFile imu_to_velo =
-      KittiCalibrationFile::read(joinPath(directory, "calib_imu_to_velo.txt"));
   calibration.velo_from_imu = rigidFromKeys(imu_to_velo, "R", "T");
   return calibration;
 }
@@ -209,7 +220,11 @@ ProjectionMatrix KittiRawCalibration::veloToImage(int camera) const
 
 KittiObjectCalibration KittiObjectCalibration::read(const std::string& path)
 {
-  const KittiCalibrationFile file = KittiCalibrationFile::read(path);
+  return fromFile(KittiCalibrationFile::read(path));
+}
+
+KittiObjectCalibration KittiObjectCalibration::fromFile(const KittiCalibrationFile& file)
+{
   KittiObjectCalibration calibration;
   for (int i = 0; i < 4; ++i)
   {

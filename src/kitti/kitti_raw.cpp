@@ -7,6 +7,7 @@
 #include <ctime>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -62,9 +63,16 @@ OxtsRecord parseOxtsLine(const std::string& line, const std::string& source)
     *field = v[i++];
   }
   int* ints[] = {&r.navstat, &r.numsats, &r.posmode, &r.velmode, &r.orimode};
-  for (int* field : ints)
+  const char* const int_names[] = {"navstat", "numsats", "posmode", "velmode", "orimode"};
+  for (std::size_t k = 0; k < 5; ++k, ++i)
   {
-    *field = static_cast<int>(v[i++]);
+    if (!(v[i] == std::floor(v[i]) && std::abs(v[i]) <= std::numeric_limits<int>::max()))
+    {
+      std::ostringstream what;
+      what << source << ": OXTS field " << i + 1 << " (" << int_names[k] << ") is not an integer: " << v[i];
+      throw std::runtime_error(what.str());
+    }
+    *ints[k] = static_cast<int>(v[i]);
   }
   return r;
 }
@@ -152,25 +160,40 @@ std::vector<KittiStamp> readTimestamps(const std::string& path)
   {
     throw std::runtime_error("cannot read timestamps file " + path);
   }
+  return parseTimestamps(file, path);
+}
+
+std::vector<KittiStamp> parseTimestamps(std::istream& input, const std::string& source)
+{
   std::vector<KittiStamp> stamps;
   std::string line;
-  for (int number = 1; std::getline(file, line); ++number)
+  for (int number = 1; std::getline(input, line); ++number)
   {
     if (line.find_first_not_of(" \t\r") == std::string::npos)
     {
       continue;
     }
-    stamps.push_back(parseKittiStamp(line, path + ":" + std::to_string(number)));
+    stamps.push_back(parseKittiStamp(line, source + ":" + std::to_string(number)));
   }
   return stamps;
 }
 
 std::vector<Tracklet> readTracklets(const std::string& path)
 {
+  std::ifstream file(path);
+  if (!file)
+  {
+    throw std::runtime_error("cannot parse tracklet file " + path + ": cannot open file");
+  }
+  return parseTracklets(file, path);
+}
+
+std::vector<Tracklet> parseTracklets(std::istream& input, const std::string& path)
+{
   boost::property_tree::ptree tree;
   try
   {
-    boost::property_tree::read_xml(path, tree);
+    boost::property_tree::read_xml(input, tree);
   }
   catch (const boost::property_tree::xml_parser_error& e)
   {

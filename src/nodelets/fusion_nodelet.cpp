@@ -26,7 +26,7 @@
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/fusion_stage.h"
-#include "grid_vision_fusion/ros/image_checks.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {

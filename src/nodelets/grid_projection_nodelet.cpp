@@ -24,9 +24,9 @@
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
-#include "grid_vision_fusion/ros/image_checks.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {

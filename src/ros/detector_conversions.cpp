@@ -1,6 +1,5 @@
 #include "grid_vision_fusion/ros/detector_conversions.h"
 
-#include <sensor_msgs/image_encodings.h>
 #include <boost/make_shared.hpp>
 
 #include <map>
@@ -8,25 +7,6 @@
 
 namespace grid_vision_fusion
 {
-PixelFormat pixelFormatFromEncoding(const std::string& encoding)
-{
-  namespace enc = sensor_msgs::image_encodings;
-  if (encoding == enc::BGR8)
-  {
-    return PixelFormat::kBgr8;
-  }
-  if (encoding == enc::RGB8)
-  {
-    return PixelFormat::kRgb8;
-  }
-  if (encoding == enc::MONO8)
-  {
-    return PixelFormat::kMono8;
-  }
-  throw std::invalid_argument("image encoding \"" + encoding +
-                              "\" is not supported (use rgb8, bgr8 or mono8)");
-}
-
 Detection2DArray::Ptr detectionsToMsg(const std_msgs::Header& image_header, std::uint32_t image_width,
                                       std::uint32_t image_height, const std::vector<Detection>& detections)
 {

@@ -1,11 +1,9 @@
 #include "grid_vision_fusion/ros/detector_stage.h"
 
-#include <cv_bridge/cv_bridge.h>
-
 #include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
-#include "grid_vision_fusion/ros/image_checks.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {
@@ -33,17 +31,13 @@ std::vector<Detection> DetectorStage::detect(const sensor_msgs::Image::ConstPtr&
   input.width = image->width;
   input.height = image->height;
   input.frame_index = frame_index;
-  cv_bridge::CvImageConstPtr view;
   if (detector_->needsPixels())
   {
-    input.format = pixelFormatFromEncoding(image->encoding);
-    const std::string error = checkImageData(*image);
+    const std::string error = imageViewOf(*image, input.pixels, input.format);
     if (!error.empty())
     {
-      throw std::invalid_argument(error);
+      throw std::invalid_argument("image: " + error);
     }
-    view = cv_bridge::toCvShare(image);
-    input.pixels = view->image;
   }
   return detector_->detect(input);
 }

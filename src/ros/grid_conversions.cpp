@@ -20,64 +20,6 @@ float packRgb(std::uint8_t r, std::uint8_t g, std::uint8_t b)
 }
 }  // namespace
 
-std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudView& view)
-{
-  const char* names[3] = {"x", "y", "z"};
-  std::size_t offsets[3] = {0, 0, 0};
-  for (int k = 0; k < 3; ++k)
-  {
-    const sensor_msgs::PointField* found = nullptr;
-    for (const auto& field : cloud.fields)
-    {
-      if (field.name == names[k])
-      {
-        found = &field;
-      }
-    }
-    if (!found)
-    {
-      return std::string("no field '") + names[k] + "'";
-    }
-    if (found->datatype != sensor_msgs::PointField::FLOAT32 || found->count != 1)
-    {
-      return std::string("field '") + names[k] + "' is not a single float32 (datatype " +
-             std::to_string(found->datatype) + ", count " + std::to_string(found->count) + ")";
-    }
-    if (found->offset + sizeof(float) > cloud.point_step)
-    {
-      return std::string("field '") + names[k] + "' lies beyond point_step " +
-             std::to_string(cloud.point_step);
-    }
-    offsets[k] = found->offset;
-  }
-  if (cloud.is_bigendian)
-  {
-    return "big-endian point data is not supported";
-  }
-  const std::size_t points = static_cast<std::size_t>(cloud.width) * cloud.height;
-  if (points > 0)
-  {
-    if (static_cast<std::size_t>(cloud.width) * cloud.point_step > cloud.row_step)
-    {
-      return "row_step " + std::to_string(cloud.row_step) + " < width * point_step";
-    }
-    if (static_cast<std::size_t>(cloud.row_step) * cloud.height > cloud.data.size())
-    {
-      return "data holds " + std::to_string(cloud.data.size()) + " bytes, row_step * height needs " +
-             std::to_string(static_cast<std::size_t>(cloud.row_step) * cloud.height);
-    }
-  }
-  view.data = cloud.data.data();
-  view.width = points > 0 ? cloud.width : 0;
-  view.height = points > 0 ? cloud.height : 0;
-  view.point_step = cloud.point_step;
-  view.row_step = cloud.row_step;
-  view.x_offset = offsets[0];
-  view.y_offset = offsets[1];
-  view.z_offset = offsets[2];
-  return std::string();
-}
-
 namespace
 {
 /// The map metadata of the grid: resolution, size and the corner of cell (0, 0), axes aligned.

@@ -3,6 +3,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace grid_vision_fusion
@@ -82,7 +84,7 @@ Trajectory parseMotion(const YAML::Node& node, const std::string& where)
     {
       width = values.size();
     }
-    if (values.size() != width)
+    if (width == 0 || values.size() != width)
     {
       throw std::runtime_error(where + ".waypoints[" + std::to_string(points.size() + poses.size()) +
                                "]: every waypoint is [t, x, y], or every one [t, x, y, yaw]");
@@ -173,10 +175,22 @@ std::uint32_t parseColor(const std::string& text)
 
 SyntheticScenario loadScenario(const std::string& path)
 {
+  std::ifstream file(path);
+  if (!file)
+  {
+    throw std::runtime_error("cannot read scenario " + path + ": bad file");
+  }
+  std::ostringstream text;
+  text << file.rdbuf();  // an empty file gives an empty document (failbit on `text` only)
+  return parseScenario(text.str(), path);
+}
+
+SyntheticScenario parseScenario(const std::string& yaml, const std::string& path)
+{
   YAML::Node root;
   try
   {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(yaml);
   }
   catch (const YAML::Exception& e)
   {

@@ -7,6 +7,7 @@
 #include <opencv2/dnn.hpp>
 
 #include <cstddef>
+#include <istream>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -120,6 +121,8 @@ struct DarknetCfgInfo
 ///         section, an unknown section, an inconsistent layer reference or [yolo] layers with
 ///         different class counts.
 DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path);
+/// parseDarknetCfg() of a cfg read from `input`; errors name `source`.
+DarknetCfgInfo parseDarknetCfg(std::istream& input, const std::string& source);
 
 /// Size in bytes a Darknet weights file for `info` must have: its header (major, minor,
 /// revision as int32, then `seen` as int64 from version 0.2 on, int32 before) and
@@ -128,10 +131,16 @@ DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path);
 ///         header, or its size differs from what `cfg_path` needs ("truncated" / "too long").
 std::size_t checkDarknetWeights(const std::string& weights_path, const std::string& cfg_path,
                                 const DarknetCfgInfo& info);
+/// checkDarknetWeights() of a weights file open in `weights` (binary, seekable); errors name
+/// `weights_source`.
+std::size_t checkDarknetWeights(std::istream& weights, const std::string& weights_source,
+                                const std::string& cfg_path, const DarknetCfgInfo& info);
 
 /// Reads class names, one per line (trailing whitespace and CR removed, blank lines skipped).
 /// @throws YoloModelError naming the file when it cannot be read or holds no name.
 std::vector<std::string> readClassNames(const std::string& path);
+/// readClassNames() of the names read from `input`; errors name `source`.
+std::vector<std::string> parseClassNames(std::istream& input, const std::string& source);
 
 /// The affine map between image pixels and network-input pixels: net = image · scale + pad.
 struct InputTransform

@@ -82,6 +82,10 @@ struct KittiRawCalibration
   /// Reads calib_cam_to_cam.txt, calib_velo_to_cam.txt and calib_imu_to_velo.txt of
   /// `directory`. @throws std::runtime_error naming the file and key at fault.
   static KittiRawCalibration readDirectory(const std::string& directory);
+  /// The calibration of the three parsed files. @throws std::runtime_error as readDirectory().
+  static KittiRawCalibration fromFiles(const KittiCalibrationFile& cam_to_cam,
+                                       const KittiCalibrationFile& velo_to_cam,
+                                       const KittiCalibrationFile& imu_to_velo);
 
   /// R_rect_00 · Tr_velo_to_cam: the rectified camera-0 frame ← velodyne, the frame in which
   /// every P_rect_0i applies.
@@ -106,6 +110,8 @@ struct KittiObjectCalibration
   /// Reads one object-benchmark calibration file. @throws std::runtime_error naming the file
   /// and the missing or malformed key.
   static KittiObjectCalibration read(const std::string& path);
+  /// The calibration of a parsed object-benchmark file. @throws std::runtime_error as read().
+  static KittiObjectCalibration fromFile(const KittiCalibrationFile& file);
 
   /// R0_rect · Tr_velo_to_cam: rectified camera-0 frame (the frame of the label_2 boxes) ← velodyne.
   Eigen::Isometry3d rectifiedFromVelo() const;

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,9 @@ KittiStamp parseKittiStamp(const std::string& text, const std::string& source);
 /// Reads a timestamps.txt file, one stamp per non-empty line.
 /// @throws std::runtime_error naming the file and line.
 std::vector<KittiStamp> readTimestamps(const std::string& path);
+/// The time stamps of a timestamps.txt read from `input` (blank lines skipped); errors name
+/// `source` and the line. @throws std::runtime_error as readTimestamps().
+std::vector<KittiStamp> parseTimestamps(std::istream& input, const std::string& source);
 
 /// One pose of a tracklet: bottom centre of the 3-D box in the velodyne frame of frame
 /// first_frame + index, yaw rz around z.
@@ -89,5 +93,8 @@ struct Tracklet
 /// Reads a tracklet_labels.xml (Boost serialization XML of the KITTI raw data).
 /// @throws std::runtime_error naming the file and what is missing or malformed.
 std::vector<Tracklet> readTracklets(const std::string& path);
+/// The tracklets of a tracklet_labels.xml read from `input`; errors name `source`.
+/// @throws std::runtime_error as readTracklets().
+std::vector<Tracklet> parseTracklets(std::istream& input, const std::string& source);
 
 }  // namespace grid_vision_fusion

@@ -9,13 +9,10 @@
 
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/detection/detector.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {
-/// The pixel format of a sensor_msgs/Image encoding: "rgb8", "bgr8" or "mono8".
-/// @throws std::invalid_argument naming the encoding for any other.
-PixelFormat pixelFormatFromEncoding(const std::string& encoding);
-
 /// The Detection2DArray of `detections`: header = `image_header` (stamp, frame_id and seq of the
 /// image), image size filled, detections in the given order (empty array when none).
 Detection2DArray::Ptr detectionsToMsg(const std_msgs::Header& image_header, std::uint32_t image_width,

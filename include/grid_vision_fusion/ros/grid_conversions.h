@@ -10,14 +10,10 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {
-/// Points `view` at the float32 x, y, z fields of `cloud` (no copy; the view is valid while
-/// `cloud` lives). Returns an empty string on success, otherwise what is wrong (missing field,
-/// field not float32, big-endian data, point_step or row_step inconsistent with the data).
-std::string pointCloudViewOf(const sensor_msgs::PointCloud2& cloud, PointCloudView& view);
-
 /// The filter's grid as a DynamicGrid (header given: scan stamp, fixed frame).
 DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msgs::Header& header);
 

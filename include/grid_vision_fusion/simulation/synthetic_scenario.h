@@ -40,6 +40,8 @@ struct SyntheticScenario
 /// color "#RRGGBB"; scenery entries have x, y, yaw, size, color.
 /// @throws std::runtime_error naming the file and the entry at fault.
 SyntheticScenario loadScenario(const std::string& path);
+/// loadScenario() of the YAML text `yaml`; errors name `source`.
+SyntheticScenario parseScenario(const std::string& yaml, const std::string& source);
 
 /// Parses "#RRGGBB" or "RRGGBB". @throws std::invalid_argument when malformed.
 std::uint32_t parseColor(const std::string& text);
