@@ -36,17 +36,46 @@ enum Pass : std::uint32_t
   kPassBirth = 3,    // newborn particles
 };
 
-// Number of k >= 0 with (u + k) * step < cumulative, at most `limit`: the samples of a systematic
-// sampling (offset u in [0, 1), spacing step) that fall below `cumulative`.
-std::size_t samplesBelow(double cumulative, double step, double u, std::size_t limit)
+// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
+// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
+// of samples below C. Both use the same comparison, so that counting and stepping agree.
+struct SystematicSamples
 {
-  const double k = std::ceil(cumulative / step - u);
-  if (!(k > 0.0))
+  double u;
+  double step;
+  std::size_t limit;
+
+  bool below(std::size_t k, double cumulative) const
   {
-    return 0;
+    return (u + static_cast<double>(k)) * step < cumulative;
   }
-  return k >= static_cast<double>(limit) ? limit : static_cast<std::size_t>(k);
-}
+
+  std::size_t count(double cumulative) const
+  {
+    const double estimate = std::ceil(cumulative / step - u);
+    std::size_t k =
+        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
+    while (k > 0 && !below(k - 1, cumulative))
+    {
+      --k;
+    }
+    while (k < limit && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+
+  /// Advances `k` past the samples below `cumulative`, up to `end`.
+  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
+  {
+    while (k < end && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+};
 
 // Significance of a mean velocity: vx^2 / var_x + vy^2 / var_y (variances floored).
 inline float velocitySignificance(float vx, float vy, float var_x, float var_y)
@@ -1168,7 +1197,7 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   // Both samplings are systematic, (u + k) * step for k = 0, 1, ... over the cumulative mass, and
   // run in blocks: each block sums its mass (in order), the exclusive prefix of these sums (in
   // block order) is where each block's cumulative mass starts, and an item whose cumulative mass
-  // goes from C0 to C1 takes the samples samplesBelow(C0) .. samplesBelow(C1) - 1 (exact slots).
+  // goes from C0 to C1 takes the samples count(C0) .. count(C1) - 1 (exact slots).
   // The last item of a block ends at the next block's start, so the blocks tile the samples.
   BlockRandom cycle_rng(config_.seed, cycle_, kPassCycle, 0);
   const float u_birth = cycle_rng.uniform();
@@ -1201,7 +1230,8 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   if (newborn_total > 1e-9)
   {
     const double step = newborn_total / static_cast<double>(capacity);
-    born = samplesBelow(newborn_total, step, u_birth, capacity);
+    const SystematicSamples samples{u_birth, step, capacity};
+    born = samples.count(newborn_total);
     const float res = static_cast<float>(geometry_.resolution);
     const float sb = static_cast<float>(config_.birth_velocity_sigma);
     const auto fraction = static_cast<float>(config_.birth_motion_fraction);
@@ -1221,9 +1251,9 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
           --c_last;
           BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
           std::vector<std::int32_t>& candidates = block_candidates_[b];
-          const std::size_t block_end = samplesBelow(block_start_[b + 1], step, u_birth, capacity);
+          const std::size_t block_end = samples.count(block_start_[b + 1]);
           double cumulative = block_start_[b];
-          std::size_t first = samplesBelow(cumulative, step, u_birth, capacity);
+          std::size_t first = samples.count(cumulative);
           for (std::size_t c = c_begin; c <= c_last; ++c)
           {
             if (newborn_[c] <= 0.0F)
@@ -1231,9 +1261,7 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
               continue;
             }
             cumulative += newborn_[c];
-            const std::size_t end =
-                c == c_last ? block_end
-                            : std::min(samplesBelow(cumulative, step, u_birth, capacity), block_end);
+            const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
             const std::size_t count = end - first;
             if (count == 0)
             {
@@ -1339,7 +1367,8 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   }
   const double step = total / static_cast<double>(n);
   const auto w_out = static_cast<float>(step);
-  const std::size_t in_use = samplesBelow(total, step, u_resample, n);
+  const SystematicSamples samples{u_resample, step, n};
+  const std::size_t in_use = samples.count(total);
   ParticleArrays& r = resampled_;
   parallel_.run(item_blocks,
                 [&](std::size_t b)
@@ -1364,9 +1393,9 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
                     return;
                   }
                   --last;
-                  const std::size_t block_end = samplesBelow(block_start_[b + 1], step, u_resample, n);
+                  const std::size_t block_end = samples.count(block_start_[b + 1]);
                   double cumulative = block_start_[b];
-                  std::size_t out = samplesBelow(cumulative, step, u_resample, n);
+                  std::size_t out = samples.count(cumulative);
                   for (std::size_t i = begin; i <= last; ++i)
                   {
                     if (!(weight[i] > 0.0F))
@@ -1375,8 +1404,7 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
                     }
                     cumulative += weight[i];
                     const std::size_t out_end =
-                        i == last ? block_end
-                                  : std::min(samplesBelow(cumulative, step, u_resample, n), block_end);
+                        i == last ? block_end : samples.advance(out, cumulative, block_end);
                     for (; out < out_end; ++out)
                     {
                       r.x[out] = x[i];

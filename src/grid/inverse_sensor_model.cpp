@@ -186,10 +186,15 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
       [&](std::size_t b, std::size_t begin, std::size_t end)
       {
         InverseSensorModelStats& bs = block_stats_[b];
-        for (std::size_t i = begin; i < end; ++i)
+        std::size_t row = begin / cloud.width;
+        std::size_t col = begin % cloud.width;
+        for (std::size_t i = begin; i < end; ++i, ++col)
         {
-          const std::size_t row = i / cloud.width;
-          const std::size_t col = i % cloud.width;
+          if (col == cloud.width)
+          {
+            col = 0;
+            ++row;
+          }
           const std::uint8_t* p = cloud.data + row * cloud.row_step + col * cloud.point_step;
           const Eigen::Vector3f ps(readFloat(p + cloud.x_offset), readFloat(p + cloud.y_offset),
                                    readFloat(p + cloud.z_offset));
