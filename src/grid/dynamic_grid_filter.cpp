@@ -527,7 +527,8 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     cycle.shift_cols = col - geometry_.origin_col;
     cycle.shift_rows = row - geometry_.origin_row;
     const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
-    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var);
+    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
+               parallel_);
     geometry_.origin_col = col;
     geometry_.origin_row = row;
     // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the
@@ -618,9 +619,16 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
       scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
                 dt_transition, config_.transition_period);
 
-  std::fill(pred_dynamic_.begin(), pred_dynamic_.end(), 0.0F);
-  std::fill(from_dynamic_static_.begin(), from_dynamic_static_.end(), 0.0F);
-  std::fill(from_dynamic_unknown_.begin(), from_dynamic_unknown_.end(), 0.0F);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        const auto begin = static_cast<std::ptrdiff_t>(geometry_.index(r_begin, 0));
+        const auto end = static_cast<std::ptrdiff_t>(geometry_.index(r_end, 0));
+        for (std::vector<float>* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_})
+        {
+          std::fill(v->begin() + begin, v->begin() + end, 0.0F);
+        }
+      });
   if (!first)
   {
     predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
@@ -711,16 +719,17 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           cells_.p_unknown[c] = lu * inv_z;
           persistent_factor_[c] = po * inv_z;
           newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
+          // the sums of step 7 start from zero
+          stat_w_[c] = 0.0F;
+          stat_vx_[c] = 0.0F;
+          stat_vy_[c] = 0.0F;
+          stat_vxx_[c] = 0.0F;
+          stat_vyy_[c] = 0.0F;
         }
       });
 
   // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
   // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
-  std::fill(stat_w_.begin(), stat_w_.end(), 0.0F);
-  std::fill(stat_vx_.begin(), stat_vx_.end(), 0.0F);
-  std::fill(stat_vy_.begin(), stat_vy_.end(), 0.0F);
-  std::fill(stat_vxx_.begin(), stat_vxx_.end(), 0.0F);
-  std::fill(stat_vyy_.begin(), stat_vyy_.end(), 0.0F);
   // Per cell sums in particle order: one loop with one thread, per band (sortParticlesByBand,
   // the cells have not changed since the prediction) with several.
   auto accumulate = [&](std::size_t i)
@@ -877,7 +886,7 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
     const int gw = geometry_.width;
     const int gh = geometry_.height;
     const auto stride = static_cast<std::size_t>(gw + 1);
-    std::fill(vacated_count_.begin(), vacated_count_.end(), 0);
+    parallelFill(parallel_, vacated_count_, 0);
     for (std::int32_t c : vacated_)
     {
       vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] =
@@ -1056,7 +1065,7 @@ void DynamicGridFilter::propagateMotion(float dt)
   // static mass of every such cell measured occupied becomes newborn dynamic mass at the rate
   // propagation_rate (per transition_period) times the source's P(D).
   const std::size_t cells = geometry_.cellCount();
-  std::fill(source_weight_.begin(), source_weight_.end(), 0.0F);
+  parallelFill(parallel_, source_weight_, 0.0F);
   const int w = geometry_.width;
   const int h = geometry_.height;
   const int steps = static_cast<int>(std::ceil(config_.propagation_length / geometry_.resolution));

@@ -149,7 +149,7 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   const auto bins = static_cast<std::size_t>(range_bins_);
   const auto sectors = static_cast<std::size_t>(sectors_);
 
-  std::fill(bin_min_z_.begin(), bin_min_z_.end(), kInf);
+  parallelFill(parallel, bin_min_z_, kInf);
   const std::size_t n = cloud.size();
   point_bin_.resize(n);
   point_x_.resize(n);
@@ -261,7 +261,8 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   // Pass 2: classify points; nearest obstacle hit and farthest return per sector (per block,
   // then combined); cells holding obstacle points.
   occupancy.resize(grid.cellCount());
-  cell_hit_.assign(grid.cellCount(), 0);
+  cell_hit_.resize(grid.cellCount());
+  parallelFill(parallel, cell_hit_, std::uint8_t{0});
   const float h_min = static_cast<float>(config_.min_obstacle_height);
   const float h_max = static_cast<float>(config_.max_obstacle_height);
   const double ox = origin.x() - grid.originX();

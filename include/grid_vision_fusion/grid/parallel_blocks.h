@@ -9,9 +9,11 @@
 #include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace grid_vision_fusion
 {
@@ -62,6 +64,20 @@ private:
 inline std::size_t blockCount(std::size_t items, std::size_t block)
 {
   return (items + block - 1) / block;
+}
+
+/// Sets every element of `v` to `value`, in blocks of 2^15 elements on the threads of `parallel`.
+template <typename T>
+void parallelFill(const ParallelBlocks& parallel, std::vector<T>& v, const T& value)
+{
+  constexpr std::size_t kBlock = std::size_t{1} << 15;
+  parallel.run(blockCount(v.size(), kBlock),
+               [&](std::size_t b)
+               {
+                 const auto begin = static_cast<std::ptrdiff_t>(b * kBlock);
+                 const auto end = static_cast<std::ptrdiff_t>(std::min(v.size(), (b + 1) * kBlock));
+                 std::fill(v.begin() + begin, v.begin() + end, value);
+               });
 }
 
 /// A random stream (SplitMix64) for one block of one pass of one cycle: the same (seed, cycle,
