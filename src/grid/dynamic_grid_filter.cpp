@@ -366,10 +366,17 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
   // its cell as it moves (particle order); several move the particles in blocks, then add the
   // masses per band of cell rows, each band's particles in particle order: the same sums.
   const bool serial = parallel_.threads() == 1;
+  const std::size_t bands = band_start_.size() - 1;
+  const auto band_cells = static_cast<std::size_t>(kRowBlock * geometry_.width);
   parallel_.run(blockCount(n, kParticleBlock),
                 [&](std::size_t b)
                 {
                   BlockRandom rng(config_.seed, cycle_, kPassPredict, b);
+                  std::size_t* band_counts = block_counts_.data() + b * bands;
+                  if (!serial)
+                  {
+                    std::fill(band_counts, band_counts + bands, 0);
+                  }
                   const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
                   for (std::size_t i = b * kParticleBlock; i < end; ++i)
                   {
@@ -403,13 +410,17 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
                       from_dynamic_unknown_[cell] += w * to_unknown;
                       p.weight[i] = w * keep;
                     }
+                    else
+                    {
+                      ++band_counts[cell / band_cells];
+                    }
                   }
                 });
   if (serial)
   {
     return;
   }
-  sortParticlesByBand();
+  sortParticlesByBand(true);
   parallel_.run(band_start_.size() - 1,
                 [&](std::size_t band)
                 {
@@ -426,7 +437,7 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
                 });
 }
 
-void DynamicGridFilter::sortParticlesByBand()
+void DynamicGridFilter::sortParticlesByBand(bool counted)
 {
   // Counting sort: per block, the particles of each band; the exclusive prefix, band by band and
   // in block order within a band, gives each block its slots; within a band the indices increase.
@@ -435,8 +446,11 @@ void DynamicGridFilter::sortParticlesByBand()
   const std::size_t blocks = blockCount(n, kParticleBlock);
   const std::size_t bands = band_start_.size() - 1;
   const auto band_cells = static_cast<std::int32_t>(kRowBlock * geometry_.width);
-  std::fill(block_counts_.begin(), block_counts_.end(), 0);
-  parallel_.run(blocks,
+  if (!counted)
+  {
+    std::fill(block_counts_.begin(), block_counts_.end(), 0);
+  }
+  parallel_.run(counted ? 0 : blocks,
                 [&](std::size_t b)
                 {
                   std::size_t* counts = block_counts_.data() + b * bands;
@@ -761,7 +775,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   {
     if (first)
     {
-      sortParticlesByBand();  // no prediction on the first scan
+      sortParticlesByBand(false);  // no prediction on the first scan
     }
     parallel_.run(band_start_.size() - 1,
                   [&](std::size_t band)
@@ -833,25 +847,31 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
   const bool birth =
       !first && have_previous_ && config_.birth_motion_speed > 0.0 && config_.birth_motion_fraction > 0.0;
   vacated_.clear();
-  if (evidence && !first)
+  if ((evidence && !first) || birth)
   {
-    for (std::size_t c = 0; c < cells; ++c)
+    // Per block of rows, then concatenated in block order: the cells in increasing order.
+    const bool windowed = evidence && !first;
+    const auto uw = static_cast<std::size_t>(geometry_.width);
+    forRowBlocks(
+        [&](std::size_t b, int r_begin, int r_end)
+        {
+          std::vector<std::int32_t>& found = block_candidates_[b];
+          found.clear();
+          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
+               c < static_cast<std::size_t>(r_end) * uw; ++c)
+          {
+            const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
+                                                cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
+                                          : previous_mask_[c] && occupancy_[c] < 0.5F;
+            if (vacated)
+            {
+              found.push_back(static_cast<std::int32_t>(c));
+            }
+          }
+        });
+    for (const std::vector<std::int32_t>& found : block_candidates_)
     {
-      if ((ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
-          cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied)
-      {
-        vacated_.push_back(static_cast<std::int32_t>(c));
-      }
-    }
-  }
-  else if (birth)
-  {
-    for (std::size_t c = 0; c < cells; ++c)
-    {
-      if (previous_mask_[c] && occupancy_[c] < 0.5F)
-      {
-        vacated_.push_back(static_cast<std::int32_t>(c));
-      }
+      vacated_.insert(vacated_.end(), found.begin(), found.end());
     }
   }
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);

@@ -200,7 +200,8 @@ private:
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
   /// With several threads: particle indices (cell >= 0) sorted by band of cell rows, stably, so
   /// that per-cell sums over a band's particles add in particle order (as one thread does).
-  void sortParticlesByBand();
+  /// `counted`: block_counts_ already holds the particles per (particle block, band).
+  void sortParticlesByBand(bool counted);
   std::size_t birthAndResample(std::size_t& born, float dt);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
@@ -256,7 +257,7 @@ private:
   std::vector<std::size_t> block_counts_;
   std::vector<std::uint32_t> band_order_;  // particle indices sorted by band (sortParticlesByBand)
   std::vector<std::size_t> band_start_;    // first index of band_order_ per band
-  std::vector<std::vector<std::int32_t>> block_candidates_;  // motionVelocity scratch per block
+  std::vector<std::vector<std::int32_t>> block_candidates_;  // per row block: vacated cells, candidates
   int bucket_cols_ = 0;
   int bucket_rows_ = 0;
   bool have_previous_ = false;
