@@ -2,13 +2,17 @@
 // street with buildings, parked and moving cars, the ego vehicle driving at 10 m/s.
 // Reports, per scan, the median of the inverse sensor model, of the rest of the filter cycle
 // and of the whole cycle [ms] (counters *_median_ms), for the default grid and particle count,
-// for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells. Not a test: run it by hand,
+// for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells, on 1 and 2 threads for the defaults
+// (BM_CycleDefaults/threads:N; the ratio of their cycle medians is printed at the end; the
+// other cases run on one thread). Not a test: run it by hand,
 //   devel/lib/grid_vision_fusion/bench_dynamic_grid
 // and record the figures in doc/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <ctime>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -101,6 +105,14 @@ double threadCpuMs()
   return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
 }
 
+// CPU time of the whole process [ms] (all its threads).
+double processCpuMs()
+{
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
 double median(std::vector<double> v)
 {
   if (v.empty())
@@ -111,22 +123,34 @@ double median(std::vector<double> v)
   return v[v.size() / 2];
 }
 
+// Median wall time of a whole cycle of BM_CycleDefaults per thread count [ms].
+std::map<int, double>& cycleMedianByThreads()
+{
+  static std::map<int, double> medians;
+  return medians;
+}
+
 // One iteration = one filter cycle on the next scan of the sequence (warm: the first 10 scans
 // are run before timing; the sequence restarts with a reset outside the timing).
-void runCycles(benchmark::State& state, const DynamicGridConfig& config)
+// cycle_cpu_median_ms is the CPU time of the calling thread only: with several threads it
+// leaves out the work of the others, which cycle_process_cpu_median_ms (all threads) includes.
+double runCycles(benchmark::State& state, const DynamicGridConfig& config)
 {
   const std::vector<Scan>& sequence = scans();
   DynamicGridFilter filter(config);
   int k = 0;
   double stamp = 0.0;
   double cpu_ms = 0.0;
+  double process_cpu_ms = 0.0;
   auto next = [&]()
   {
     const Scan& scan = sequence[static_cast<std::size_t>(k)];
     const double cpu_start = threadCpuMs();
+    const double process_start = processCpuMs();
     const DynamicGridCycle cycle =
         filter.update(PointCloudView::packedXyz(scan.xyz.data(), scan.xyz.size() / 3), scan.pose, stamp);
     cpu_ms = threadCpuMs() - cpu_start;
+    process_cpu_ms = processCpuMs() - process_start;
     stamp += kPeriod;
     k = (k + 1) % kScans;
     return cycle;
@@ -139,6 +163,7 @@ void runCycles(benchmark::State& state, const DynamicGridConfig& config)
   std::vector<double> filter_ms;
   std::vector<double> total_ms;
   std::vector<double> total_cpu_ms;
+  std::vector<double> total_process_cpu_ms;
   std::size_t points = 0;
   std::size_t in_use = 0;
   for (auto _ : state)
@@ -158,6 +183,7 @@ void runCycles(benchmark::State& state, const DynamicGridConfig& config)
     filter_ms.push_back(1e3 * cycle.filter_seconds);
     total_ms.push_back(1e3 * (cycle.sensor_model_seconds + cycle.filter_seconds));
     total_cpu_ms.push_back(cpu_ms);
+    total_process_cpu_ms.push_back(process_cpu_ms);
     points = cycle.sensor.points;
     in_use = cycle.particles_in_use;
   }
@@ -165,8 +191,11 @@ void runCycles(benchmark::State& state, const DynamicGridConfig& config)
   state.counters["filter_median_ms"] = median(filter_ms);
   state.counters["cycle_median_ms"] = median(total_ms);
   state.counters["cycle_cpu_median_ms"] = median(total_cpu_ms);
+  state.counters["cycle_process_cpu_median_ms"] = median(total_process_cpu_ms);
   state.counters["points"] = static_cast<double>(points);
   state.counters["particles_in_use"] = static_cast<double>(in_use);
+  state.counters["threads"] = config.threads;
+  return median(total_ms);
 }
 
 void BM_SensorModel(benchmark::State& state)
@@ -191,13 +220,21 @@ BENCHMARK(BM_SensorModel)->Unit(benchmark::kMillisecond);
 
 void BM_CycleDefaults(benchmark::State& state)
 {
-  runCycles(state, DynamicGridConfig());
+  DynamicGridConfig config;
+  config.threads = static_cast<int>(state.range(0));
+  cycleMedianByThreads()[config.threads] = runCycles(state, config);
 }
-BENCHMARK(BM_CycleDefaults)->Unit(benchmark::kMillisecond)->Iterations(200);
+BENCHMARK(BM_CycleDefaults)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(200)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2);
 
 void BM_CycleParticles(benchmark::State& state)
 {
   DynamicGridConfig config;
+  config.threads = 1;
   config.particle_count = static_cast<int>(state.range(0));
   runCycles(state, config);
 }
@@ -210,6 +247,7 @@ BENCHMARK(BM_CycleParticles)
 void BM_CycleCells(benchmark::State& state)
 {
   DynamicGridConfig config;
+  config.threads = 1;
   config.width = static_cast<int>(state.range(0));
   config.height = config.width;
   runCycles(state, config);
@@ -234,6 +272,14 @@ int main(int argc, char** argv)
     return 1;
   }
   benchmark::RunSpecifiedBenchmarks();
+  const std::map<int, double>& medians = grid_vision_fusion::cycleMedianByThreads();
+  if (medians.count(1) != 0 && medians.count(2) != 0 && medians.at(1) > 0.0)
+  {
+    std::printf(
+        "BM_CycleDefaults: cycle median %.2f ms on 1 thread, %.2f ms on 2 threads, ratio %.3f "
+        "(target <= 0.6)\n",
+        medians.at(1), medians.at(2), medians.at(2) / medians.at(1));
+  }
   benchmark::Shutdown();
   return 0;
 }

@@ -12,6 +12,7 @@ target_link_libraries(gvf_box_world_lidar PUBLIC grid_vision_fusion_simulation)
 # --- core: one gtest per folder, linking the core library only --------------------------------
 gvf_gtest(test_grid
   SOURCES test/grid/test_grid_map.cpp test/grid/test_inverse_sensor_model.cpp test/grid/test_dynamic_grid_filter.cpp
+    test/grid/test_grid_threads.cpp
   LINK grid_vision_fusion_core gvf_box_world_lidar)
 gvf_gtest(test_detection
   SOURCES test/detection/test_yolo_detector.cpp test/detection/test_kitti_labels.cpp

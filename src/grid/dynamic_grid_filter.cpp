@@ -24,6 +24,58 @@ constexpr float kSignificantMotion = 9.0F;      // m^2 of a propagation source (
 constexpr float kMinVelocityVariance = 0.01F;   // [m^2/s^2] floor of var_x, var_y in m^2
 constexpr float kInheritVarianceFloor = 0.25F;  // [m^2/s^2] floor of an inherited velocity variance
 constexpr std::uint16_t kAgesNever = 0xFFFF;    // both ages saturated: never (or not for 255 scans)
+// Blocks of the parallel passes (doc/grid_filter.md, "Determinism"): fixed sizes, independent of
+// the thread count, so every block does the same work and draws the same random numbers.
+constexpr std::size_t kParticleBlock = 4096;  // particles per block
+constexpr int kRowBlock = 8;                  // grid rows per block (and per band of the particle sort)
+// Passes that draw random numbers: part of the seed of each block's stream.
+enum Pass : std::uint32_t
+{
+  kPassCycle = 1,    // the offsets of the two systematic samplings
+  kPassPredict = 2,  // process noise
+  kPassBirth = 3,    // newborn particles
+};
+
+// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
+// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
+// of samples below C. Both use the same comparison, so that counting and stepping agree.
+struct SystematicSamples
+{
+  double u;
+  double step;
+  std::size_t limit;
+
+  bool below(std::size_t k, double cumulative) const
+  {
+    return (u + static_cast<double>(k)) * step < cumulative;
+  }
+
+  std::size_t count(double cumulative) const
+  {
+    const double estimate = std::ceil(cumulative / step - u);
+    std::size_t k =
+        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
+    while (k > 0 && !below(k - 1, cumulative))
+    {
+      --k;
+    }
+    while (k < limit && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+
+  /// Advances `k` past the samples below `cumulative`, up to `end`.
+  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
+  {
+    while (k < end && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+};
 
 // Significance of a mean velocity: vx^2 / var_x + vy^2 / var_y (variances floored).
 inline float velocitySignificance(float vx, float vy, float var_x, float var_y)
@@ -55,6 +107,11 @@ const std::vector<float>& normalTable()
     return t;
   }();
   return table;
+}
+
+inline float normalSample(BlockRandom& rng)
+{
+  return normalTable()[rng.bits16()];
 }
 
 void require(bool condition, const char* field, const std::string& what)
@@ -184,6 +241,7 @@ void DynamicGridConfig::validate() const
   require(std::isfinite(mahalanobis_threshold) && mahalanobis_threshold >= 0.0, "mahalanobis_threshold",
           "must be >= 0");
   require(occupied_threshold > 0.0 && occupied_threshold <= 1.0, "occupied_threshold", "must be in (0, 1]");
+  require(threads >= 0 && threads <= 256, "threads", "must be in [0, 256] (0 = all cores)");
   sensor_model.validate();
 }
 
@@ -198,7 +256,7 @@ void ParticleArrays::resize(std::size_t n)
 }
 
 DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
-    : config_((config.validate(), config)), sensor_model_(config.sensor_model), rng_(config.seed)
+    : config_((config.validate(), config)), parallel_(config.threads), sensor_model_(config.sensor_model)
 {
   geometry_.width = config_.width;
   geometry_.height = config_.height;
@@ -251,6 +309,14 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   bucket_start_.assign(static_cast<std::size_t>(bucket_cols_) * static_cast<std::size_t>(bucket_rows_) + 1,
                        0);
   normalTable();
+  const std::size_t blocks = std::max({blockCount(n, kParticleBlock) + blockCount(births, kParticleBlock),
+                                       blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock)});
+  block_sum_.resize(blocks);
+  block_start_.resize(blocks + 1);
+  block_candidates_.resize(blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock));
+  band_order_.resize(n);
+  band_start_.resize(blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock) + 1);
+  block_counts_.resize(blockCount(n, kParticleBlock) * (band_start_.size() - 1));
   reset();
 }
 
@@ -267,26 +333,8 @@ void DynamicGridFilter::reset()
   std::fill(motion_evidence_.begin(), motion_evidence_.end(), 0.0F);
   vacated_.clear();
   have_previous_ = false;
-  rng_.seed(config_.seed);
-  normal_has_spare_ = false;
+  cycle_ = 0;
   initialised_ = false;
-}
-
-inline float DynamicGridFilter::normal()
-{
-  if (normal_has_spare_)
-  {
-    normal_has_spare_ = false;
-    return normalTable()[normal_bits_ >> kNormalTableBits];
-  }
-  normal_bits_ = static_cast<std::uint32_t>(rng_());
-  normal_has_spare_ = true;
-  return normalTable()[normal_bits_ & (kNormalTableSize - 1)];
-}
-
-inline float DynamicGridFilter::uniform()
-{
-  return static_cast<float>(static_cast<std::uint32_t>(rng_()) >> 8) * (1.0F / 16777216.0F);
 }
 
 void DynamicGridFilter::placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col,
@@ -313,38 +361,147 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
   const float inv_res = 1.0F / res;
   ParticleArrays& p = particles_;
   const std::size_t n = p.size();
-  for (std::size_t i = 0; i < n; ++i)
+  // Eq. 4: the particle keeps the fraction `keep` of its mass as dynamic; the rest becomes
+  // static or unknown mass of the cell it arrives in. One thread adds each particle's masses to
+  // its cell as it moves (particle order); several move the particles in blocks, then add the
+  // masses per band of cell rows, each band's particles in particle order: the same sums.
+  const bool serial = parallel_.threads() == 1;
+  const std::size_t bands = band_start_.size() - 1;
+  const auto band_cells = static_cast<std::size_t>(kRowBlock * geometry_.width);
+  parallel_.run(blockCount(n, kParticleBlock),
+                [&](std::size_t b)
+                {
+                  BlockRandom rng(config_.seed, cycle_, kPassPredict, b);
+                  std::size_t* band_counts = block_counts_.data() + b * bands;
+                  if (!serial)
+                  {
+                    std::fill(band_counts, band_counts + bands, 0);
+                  }
+                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  {
+                    if (p.weight[i] <= 0.0F)
+                    {
+                      p.cell[i] = -1;
+                      continue;
+                    }
+                    const float ax = sa * normalSample(rng);
+                    const float ay = sa * normalSample(rng);
+                    p.x[i] += (p.vx[i] + 0.5F * ax * dt) * dt;
+                    p.y[i] += (p.vy[i] + 0.5F * ay * dt) * dt;
+                    p.vx[i] += ax * dt;
+                    p.vy[i] += ay * dt;
+                    if (!(p.x[i] >= 0.0F && p.y[i] >= 0.0F && p.x[i] < w_lim && p.y[i] < h_lim) ||
+                        p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > max_v2)
+                    {
+                      p.weight[i] = 0.0F;
+                      p.cell[i] = -1;
+                      continue;
+                    }
+                    const int c = std::min(static_cast<int>(p.x[i] * inv_res), geometry_.width - 1);
+                    const int r = std::min(static_cast<int>(p.y[i] * inv_res), geometry_.height - 1);
+                    const std::size_t cell = geometry_.index(r, c);
+                    p.cell[i] = static_cast<std::int32_t>(cell);
+                    if (serial)
+                    {
+                      const float w = p.weight[i];
+                      pred_dynamic_[cell] += w * keep;
+                      from_dynamic_static_[cell] += w * to_static;
+                      from_dynamic_unknown_[cell] += w * to_unknown;
+                      p.weight[i] = w * keep;
+                    }
+                    else
+                    {
+                      ++band_counts[cell / band_cells];
+                    }
+                  }
+                });
+  if (serial)
   {
-    if (p.weight[i] <= 0.0F)
-    {
-      p.cell[i] = -1;
-      continue;
-    }
-    const float ax = sa * normal();
-    const float ay = sa * normal();
-    p.x[i] += (p.vx[i] + 0.5F * ax * dt) * dt;
-    p.y[i] += (p.vy[i] + 0.5F * ay * dt) * dt;
-    p.vx[i] += ax * dt;
-    p.vy[i] += ay * dt;
-    if (!(p.x[i] >= 0.0F && p.y[i] >= 0.0F && p.x[i] < w_lim && p.y[i] < h_lim) ||
-        p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] > max_v2)
-    {
-      p.weight[i] = 0.0F;
-      p.cell[i] = -1;
-      continue;
-    }
-    const int c = std::min(static_cast<int>(p.x[i] * inv_res), geometry_.width - 1);
-    const int r = std::min(static_cast<int>(p.y[i] * inv_res), geometry_.height - 1);
-    const std::size_t cell = geometry_.index(r, c);
-    p.cell[i] = static_cast<std::int32_t>(cell);
-    // Eq. 4: the particle keeps the fraction `keep` of its mass as dynamic; the rest becomes
-    // static or unknown mass of the cell it arrives in.
-    const float w = p.weight[i];
-    pred_dynamic_[cell] += w * keep;
-    from_dynamic_static_[cell] += w * to_static;
-    from_dynamic_unknown_[cell] += w * to_unknown;
-    p.weight[i] = w * keep;
+    return;
   }
+  sortParticlesByBand(true);
+  parallel_.run(band_start_.size() - 1,
+                [&](std::size_t band)
+                {
+                  for (std::size_t k = band_start_[band]; k < band_start_[band + 1]; ++k)
+                  {
+                    const std::uint32_t i = band_order_[k];
+                    const auto cell = static_cast<std::size_t>(p.cell[i]);
+                    const float w = p.weight[i];
+                    pred_dynamic_[cell] += w * keep;
+                    from_dynamic_static_[cell] += w * to_static;
+                    from_dynamic_unknown_[cell] += w * to_unknown;
+                    p.weight[i] = w * keep;
+                  }
+                });
+}
+
+void DynamicGridFilter::sortParticlesByBand(bool counted)
+{
+  // Counting sort: per block, the particles of each band; the exclusive prefix, band by band and
+  // in block order within a band, gives each block its slots; within a band the indices increase.
+  const ParticleArrays& p = particles_;
+  const std::size_t n = p.size();
+  const std::size_t blocks = blockCount(n, kParticleBlock);
+  const std::size_t bands = band_start_.size() - 1;
+  const auto band_cells = static_cast<std::int32_t>(kRowBlock * geometry_.width);
+  if (!counted)
+  {
+    std::fill(block_counts_.begin(), block_counts_.end(), 0);
+  }
+  parallel_.run(counted ? 0 : blocks,
+                [&](std::size_t b)
+                {
+                  std::size_t* counts = block_counts_.data() + b * bands;
+                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  {
+                    if (p.cell[i] >= 0)
+                    {
+                      ++counts[static_cast<std::size_t>(p.cell[i] / band_cells)];
+                    }
+                  }
+                });
+  std::size_t total = 0;
+  for (std::size_t band = 0; band < bands; ++band)
+  {
+    band_start_[band] = total;
+    for (std::size_t b = 0; b < blocks; ++b)
+    {
+      std::size_t& slot = block_counts_[b * bands + band];
+      const std::size_t count = slot;
+      slot = total;
+      total += count;
+    }
+  }
+  band_start_[bands] = total;
+  parallel_.run(blocks,
+                [&](std::size_t b)
+                {
+                  std::size_t* next = block_counts_.data() + b * bands;
+                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  {
+                    if (p.cell[i] >= 0)
+                    {
+                      band_order_[next[static_cast<std::size_t>(p.cell[i] / band_cells)]++] =
+                          static_cast<std::uint32_t>(i);
+                    }
+                  }
+                });
+}
+
+template <typename F>
+void DynamicGridFilter::forRowBlocks(const F& f) const
+{
+  const int h = geometry_.height;
+  parallel_.run(blockCount(static_cast<std::size_t>(h), kRowBlock),
+                [&](std::size_t b)
+                {
+                  const int r0 = static_cast<int>(b) * kRowBlock;
+                  f(b, r0, std::min(h, r0 + kRowBlock));
+                });
 }
 
 DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
@@ -384,7 +541,8 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     cycle.shift_cols = col - geometry_.origin_col;
     cycle.shift_rows = row - geometry_.origin_row;
     const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
-    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var);
+    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
+               parallel_);
     geometry_.origin_col = col;
     geometry_.origin_row = row;
     // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the
@@ -397,29 +555,33 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     }
     else
     {
-      for (int r = 0; r < h; ++r)
-      {
-        const std::int64_t src_r = r + cycle.shift_rows;
-        for (int c = 0; c < w; ++c)
-        {
-          const std::int64_t src_c = c + cycle.shift_cols;
-          const std::size_t dst = geometry_.index(r, c);
-          if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+      forRowBlocks(
+          [&](std::size_t, int r_begin, int r_end)
           {
-            const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
-                                    static_cast<std::size_t>(src_c);
-            previous_mask_[dst] = occupied_mask_[src];
-            age_scratch_[dst] = ages_[src];
-            evidence_scratch_[dst] = motion_evidence_[src];
-          }
-          else
-          {
-            previous_mask_[dst] = 0;
-            age_scratch_[dst] = kAgesNever;
-            evidence_scratch_[dst] = 0.0F;
-          }
-        }
-      }
+            for (int r = r_begin; r < r_end; ++r)
+            {
+              const std::int64_t src_r = r + cycle.shift_rows;
+              for (int c = 0; c < w; ++c)
+              {
+                const std::int64_t src_c = c + cycle.shift_cols;
+                const std::size_t dst = geometry_.index(r, c);
+                if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+                {
+                  const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                          static_cast<std::size_t>(src_c);
+                  previous_mask_[dst] = occupied_mask_[src];
+                  age_scratch_[dst] = ages_[src];
+                  evidence_scratch_[dst] = motion_evidence_[src];
+                }
+                else
+                {
+                  previous_mask_[dst] = 0;
+                  age_scratch_[dst] = kAgesNever;
+                  evidence_scratch_[dst] = 0.0F;
+                }
+              }
+            }
+          });
       std::swap(ages_, age_scratch_);
       std::swap(motion_evidence_, evidence_scratch_);
     }
@@ -427,11 +589,17 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
     if (sx != 0.0F || sy != 0.0F)
     {
-      for (std::size_t i = 0; i < particles_.size(); ++i)
-      {
-        particles_.x[i] -= sx;
-        particles_.y[i] -= sy;
-      }
+      const std::size_t n = particles_.size();
+      parallel_.run(blockCount(n, kParticleBlock),
+                    [&](std::size_t b)
+                    {
+                      const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                      for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                      {
+                        particles_.x[i] -= sx;
+                        particles_.y[i] -= sy;
+                      }
+                    });
     }
   }
   initialised_ = true;
@@ -442,7 +610,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   const Clock::time_point t_model = Clock::now();
   if (cloud.size() > 0)
   {
-    cycle.sensor = sensor_model_.compute(cloud, world_from_sensor, geometry_, occupancy_);
+    cycle.sensor = sensor_model_.compute(cloud, world_from_sensor, geometry_, occupancy_, parallel_);
   }
   else
   {
@@ -465,10 +633,16 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
       scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
                 dt_transition, config_.transition_period);
 
-  const std::size_t cells = geometry_.cellCount();
-  std::fill(pred_dynamic_.begin(), pred_dynamic_.end(), 0.0F);
-  std::fill(from_dynamic_static_.begin(), from_dynamic_static_.end(), 0.0F);
-  std::fill(from_dynamic_unknown_.begin(), from_dynamic_unknown_.end(), 0.0F);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        const auto begin = static_cast<std::ptrdiff_t>(geometry_.index(r_begin, 0));
+        const auto end = static_cast<std::ptrdiff_t>(geometry_.index(r_end, 0));
+        for (std::vector<float>* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_})
+        {
+          std::fill(v->begin() + begin, v->begin() + end, 0.0F);
+        }
+      });
   if (!first)
   {
     predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
@@ -483,91 +657,101 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   const auto u_to_d = static_cast<float>(config_.unknown_to_dynamic_by_motion);
   const float start =
       perInterval(config_.static_to_dynamic_by_motion, dt_transition, config_.transition_period);
-  for (std::size_t c = 0; c < cells; ++c)
-  {
-    const float s = cells_.p_static[c];
-    const float e = cells_.p_free[c];
-    const float u = cells_.p_unknown[c];
-    const float po = occupancy_[c];
-    const float mu = evidence ? motion_evidence_[c] : 0.0F;
-    // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
-    // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
-    // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
-    // instead of drifting to a stale static/free prior while it is shadowed).
-    const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
-    // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
-    // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
-    // a cell measured occupied start moving (a static object does not leave a cell in view).
-    const float u_s = lambda * ru.to[0] * (1.0F - u_to_d * mu);
-    const float u_d = lambda * (ru.to[1] + ru.to[0] * u_to_d * mu);
-    const float u_e = lambda * ru.to[2];
-    const float s_start = po > 0.5F ? std::min(start * mu, rs.stay) : 0.0F;
-    const float s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_dynamic_static_[c];
-    const float d_persistent = pred_dynamic_[c];
-    const float d_started = s * s_start;
-    float d_newborn = s * rs.to[0] + d_started + e * re.to[1] + u * u_d;
-    const float e_pred = e * re.stay + u * u_e;
-    float u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
-    const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
-    float d_vacated = 0.0F;
-    if (total < 1.0F)
-    {
-      // The mass that moved out of the cell with its particles. vacated_to_dynamic: in an observed
-      // cell the share q = D / (S + D) (1 - exp(-m^2/2)) -- how much the occupant was believed to
-      // move, times the significance m^2 of the velocity that left -- is the next part of the
-      // moving object (newborn dynamic mass with that velocity), the rest of the observed part is
-      // left to the measurement (renormalised away); unobserved, it becomes unknown.
-      const float hole = 1.0F - total;
-      if (config_.vacated_to_dynamic)
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
       {
-        const float m2 =
-            velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
-        const float occupied = s + cells_.p_dynamic[c];
-        const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
-        d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
-        d_newborn += d_vacated;
-        u_pred += (1.0F - lambda) * hole;
-        left_vx_[c] = cells_.vx[c];
-        left_vy_[c] = cells_.vy[c];
-        left_var_x_[c] = cells_.v_var_x[c];
-        left_var_y_[c] = cells_.v_var_y[c];
-      }
-      else
-      {
-        u_pred += hole;  // unknown now
-      }
-    }
-    vacated_share_[c] = d_newborn > 0.0F ? d_vacated / d_newborn : 0.0F;
-    start_share_[c] = d_newborn > 0.0F ? d_started / d_newborn : 0.0F;
-    propagated_share_[c] = 0.0F;
-    const float ls = po * s_pred;
-    const float ldp = po * d_persistent;
-    const float ldn = po * d_newborn;
-    const float le = (1.0F - po) * e_pred;
-    const float lu = 0.5F * u_pred;
-    const float z = ls + ldp + ldn + le + lu;
-    const float inv_z = 1.0F / z;
-    cells_.p_static[c] = ls * inv_z;
-    cells_.p_dynamic[c] = (ldp + ldn) * inv_z;
-    cells_.p_free[c] = le * inv_z;
-    cells_.p_unknown[c] = lu * inv_z;
-    persistent_factor_[c] = po * inv_z;
-    newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
-  }
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * gw; c < static_cast<std::size_t>(r_end) * gw;
+             ++c)
+        {
+          const float s = cells_.p_static[c];
+          const float e = cells_.p_free[c];
+          const float u = cells_.p_unknown[c];
+          const float po = occupancy_[c];
+          const float mu = evidence ? motion_evidence_[c] : 0.0F;
+          // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
+          // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
+          // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
+          // instead of drifting to a stale static/free prior while it is shadowed).
+          const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
+          // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
+          // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
+          // a cell measured occupied start moving (a static object does not leave a cell in view).
+          const float u_s = lambda * ru.to[0] * (1.0F - u_to_d * mu);
+          const float u_d = lambda * (ru.to[1] + ru.to[0] * u_to_d * mu);
+          const float u_e = lambda * ru.to[2];
+          const float s_start = po > 0.5F ? std::min(start * mu, rs.stay) : 0.0F;
+          const float s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_dynamic_static_[c];
+          const float d_persistent = pred_dynamic_[c];
+          const float d_started = s * s_start;
+          float d_newborn = s * rs.to[0] + d_started + e * re.to[1] + u * u_d;
+          const float e_pred = e * re.stay + u * u_e;
+          float u_pred =
+              s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
+          const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
+          float d_vacated = 0.0F;
+          if (total < 1.0F)
+          {
+            // The mass that moved out of the cell with its particles. vacated_to_dynamic: in an observed
+            // cell the share q = D / (S + D) (1 - exp(-m^2/2)) -- how much the occupant was believed to
+            // move, times the significance m^2 of the velocity that left -- is the next part of the
+            // moving object (newborn dynamic mass with that velocity), the rest of the observed part is
+            // left to the measurement (renormalised away); unobserved, it becomes unknown.
+            const float hole = 1.0F - total;
+            if (config_.vacated_to_dynamic)
+            {
+              const float m2 =
+                  velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
+              const float occupied = s + cells_.p_dynamic[c];
+              const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
+              d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+              d_newborn += d_vacated;
+              u_pred += (1.0F - lambda) * hole;
+              left_vx_[c] = cells_.vx[c];
+              left_vy_[c] = cells_.vy[c];
+              left_var_x_[c] = cells_.v_var_x[c];
+              left_var_y_[c] = cells_.v_var_y[c];
+            }
+            else
+            {
+              u_pred += hole;  // unknown now
+            }
+          }
+          vacated_share_[c] = d_newborn > 0.0F ? d_vacated / d_newborn : 0.0F;
+          start_share_[c] = d_newborn > 0.0F ? d_started / d_newborn : 0.0F;
+          propagated_share_[c] = 0.0F;
+          const float ls = po * s_pred;
+          const float ldp = po * d_persistent;
+          const float ldn = po * d_newborn;
+          const float le = (1.0F - po) * e_pred;
+          const float lu = 0.5F * u_pred;
+          const float z = ls + ldp + ldn + le + lu;
+          const float inv_z = 1.0F / z;
+          cells_.p_static[c] = ls * inv_z;
+          cells_.p_dynamic[c] = (ldp + ldn) * inv_z;
+          cells_.p_free[c] = le * inv_z;
+          cells_.p_unknown[c] = lu * inv_z;
+          persistent_factor_[c] = po * inv_z;
+          newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
+          // the sums of step 7 start from zero
+          stat_w_[c] = 0.0F;
+          stat_vx_[c] = 0.0F;
+          stat_vy_[c] = 0.0F;
+          stat_vxx_[c] = 0.0F;
+          stat_vyy_[c] = 0.0F;
+        }
+      });
 
   // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
   // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
-  std::fill(stat_w_.begin(), stat_w_.end(), 0.0F);
-  std::fill(stat_vx_.begin(), stat_vx_.end(), 0.0F);
-  std::fill(stat_vy_.begin(), stat_vy_.end(), 0.0F);
-  std::fill(stat_vxx_.begin(), stat_vxx_.end(), 0.0F);
-  std::fill(stat_vyy_.begin(), stat_vyy_.end(), 0.0F);
-  for (std::size_t i = 0; i < n; ++i)
+  // Per cell sums in particle order: one loop with one thread, per band (sortParticlesByBand,
+  // the cells have not changed since the prediction) with several.
+  auto accumulate = [&](std::size_t i)
   {
     const std::int32_t ci = p.cell[i];
     if (ci < 0)
     {
-      continue;
+      return;
     }
     const auto c = static_cast<std::size_t>(ci);
     const float w = p.weight[i] * persistent_factor_[c];
@@ -579,28 +763,55 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     stat_vy_[c] += w * vy;
     stat_vxx_[c] += w * vx * vx;
     stat_vyy_[c] += w * vy * vy;
+  };
+  if (parallel_.threads() == 1)
+  {
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      accumulate(i);
+    }
+  }
+  else
+  {
+    if (first)
+    {
+      sortParticlesByBand(false);  // no prediction on the first scan
+    }
+    parallel_.run(band_start_.size() - 1,
+                  [&](std::size_t band)
+                  {
+                    for (std::size_t k = band_start_[band]; k < band_start_[band + 1]; ++k)
+                    {
+                      accumulate(band_order_[k]);
+                    }
+                  });
   }
   const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
-  for (std::size_t c = 0; c < cells; ++c)
-  {
-    const float w = stat_w_[c];
-    if (w > 1e-12F)
-    {
-      const float mx = stat_vx_[c] / w;
-      const float my = stat_vy_[c] / w;
-      cells_.vx[c] = mx;
-      cells_.vy[c] = my;
-      cells_.v_var_x[c] = std::max(stat_vxx_[c] / w - mx * mx, 0.0F);
-      cells_.v_var_y[c] = std::max(stat_vyy_[c] / w - my * my, 0.0F);
-    }
-    else
-    {
-      cells_.vx[c] = 0.0F;
-      cells_.vy[c] = 0.0F;
-      cells_.v_var_x[c] = prior_var;
-      cells_.v_var_y[c] = prior_var;
-    }
-  }
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * gw; c < static_cast<std::size_t>(r_end) * gw;
+             ++c)
+        {
+          const float w = stat_w_[c];
+          if (w > 1e-12F)
+          {
+            const float mx = stat_vx_[c] / w;
+            const float my = stat_vy_[c] / w;
+            cells_.vx[c] = mx;
+            cells_.vy[c] = my;
+            cells_.v_var_x[c] = std::max(stat_vxx_[c] / w - mx * mx, 0.0F);
+            cells_.v_var_y[c] = std::max(stat_vyy_[c] / w - my * my, 0.0F);
+          }
+          else
+          {
+            cells_.vx[c] = 0.0F;
+            cells_.vy[c] = 0.0F;
+            cells_.v_var_x[c] = prior_var;
+            cells_.v_var_y[c] = prior_var;
+          }
+        }
+      });
 
   // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
   if (evidence && config_.propagation_rate > 0.0)
@@ -610,6 +821,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
 
   // 8-9. Birth in proportion to the newborn mass, resampling.
   cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
+  ++cycle_;
   const Clock::time_point t_end = Clock::now();
   cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
   cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
@@ -635,25 +847,31 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
   const bool birth =
       !first && have_previous_ && config_.birth_motion_speed > 0.0 && config_.birth_motion_fraction > 0.0;
   vacated_.clear();
-  if (evidence && !first)
+  if ((evidence && !first) || birth)
   {
-    for (std::size_t c = 0; c < cells; ++c)
+    // Per block of rows, then concatenated in block order: the cells in increasing order.
+    const bool windowed = evidence && !first;
+    const auto uw = static_cast<std::size_t>(geometry_.width);
+    forRowBlocks(
+        [&](std::size_t b, int r_begin, int r_end)
+        {
+          std::vector<std::int32_t>& found = block_candidates_[b];
+          found.clear();
+          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
+               c < static_cast<std::size_t>(r_end) * uw; ++c)
+          {
+            const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
+                                                cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
+                                          : previous_mask_[c] && occupancy_[c] < 0.5F;
+            if (vacated)
+            {
+              found.push_back(static_cast<std::int32_t>(c));
+            }
+          }
+        });
+    for (const std::vector<std::int32_t>& found : block_candidates_)
     {
-      if ((ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
-          cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied)
-      {
-        vacated_.push_back(static_cast<std::int32_t>(c));
-      }
-    }
-  }
-  else if (birth)
-  {
-    for (std::size_t c = 0; c < cells; ++c)
-    {
-      if (previous_mask_[c] && occupancy_[c] < 0.5F)
-      {
-        vacated_.push_back(static_cast<std::int32_t>(c));
-      }
+      vacated_.insert(vacated_.end(), found.begin(), found.end());
     }
   }
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
@@ -688,7 +906,7 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
     const int gw = geometry_.width;
     const int gh = geometry_.height;
     const auto stride = static_cast<std::size_t>(gw + 1);
-    std::fill(vacated_count_.begin(), vacated_count_.end(), 0);
+    parallelFill(parallel_, vacated_count_, 0);
     for (std::int32_t c : vacated_)
     {
       vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] =
@@ -726,16 +944,36 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
       vacated_count_[i] = 0;
     }
     const bool any_vacated = isolated_.size() < vacated_.size();
-    for (int r = 1; r <= gh; ++r)
-    {
-      std::int32_t row_sum = 0;
-      for (int col = 1; col <= gw; ++col)
-      {
-        const std::size_t i = static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col);
-        row_sum += vacated_count_[i];
-        vacated_count_[i] = row_sum + vacated_count_[i - stride];
-      }
-    }
+    // Summed-area table (integers: exact in any order): prefix sums along the rows, then along
+    // the columns.
+    forRowBlocks(
+        [&](std::size_t, int r_begin, int r_end)
+        {
+          for (int r = r_begin + 1; r <= r_end; ++r)
+          {
+            std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+            for (int col = 1; col <= gw; ++col)
+            {
+              row[col] += row[col - 1];
+            }
+          }
+        });
+    constexpr int kColumnBlock = 64;
+    parallel_.run(blockCount(static_cast<std::size_t>(gw), kColumnBlock),
+                  [&](std::size_t b)
+                  {
+                    const int c0 = 1 + static_cast<int>(b) * kColumnBlock;
+                    const int c1 = std::min(gw, c0 + kColumnBlock - 1);
+                    for (int r = 2; r <= gh; ++r)
+                    {
+                      std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+                      const std::int32_t* above = row - stride;
+                      for (int col = c0; col <= c1; ++col)
+                      {
+                        row[col] += above[col];
+                      }
+                    }
+                  });
     const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
     // An appearing surface that was hit next door in the previous scan has not moved there: a
     // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
@@ -756,26 +994,30 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
     const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
     auto count = [&](int r, int col)
     { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
-    for (int r = 0; r < gh; ++r)
-    {
-      const int r0 = std::max(0, r - radius);
-      const int r1 = std::min(gh, r + radius + 1);
-      for (int col = 0; col < gw; ++col)
-      {
-        const std::size_t c = geometry_.index(r, col);
-        float e = decay * motion_evidence_[c];
-        if (any_vacated)
+    forRowBlocks(
+        [&](std::size_t, int r_begin, int r_end)
         {
-          const int c0 = std::max(0, col - radius);
-          const int c1 = std::min(gw, col + radius + 1);
-          if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
+          for (int r = r_begin; r < r_end; ++r)
           {
-            e = 1.0F;
+            const int r0 = std::max(0, r - radius);
+            const int r1 = std::min(gh, r + radius + 1);
+            for (int col = 0; col < gw; ++col)
+            {
+              const std::size_t c = geometry_.index(r, col);
+              float e = decay * motion_evidence_[c];
+              if (any_vacated)
+              {
+                const int c0 = std::max(0, col - radius);
+                const int c1 = std::min(gw, col + radius + 1);
+                if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
+                {
+                  e = 1.0F;
+                }
+              }
+              motion_evidence_[c] = e;
+            }
           }
-        }
-        motion_evidence_[c] = e;
-      }
-    }
+        });
     // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
     auto appeared = [&](int r, int col)
     {
@@ -783,37 +1025,47 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
       return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
              !previousHitNear(r, col);
     };
-    for (int r = 0; r < gh; ++r)
-    {
-      for (int col = 0; col < gw; ++col)
-      {
-        const std::size_t c = geometry_.index(r, col);
-        if (occupancy_[c] < p_hit || !appeared(r, col))
+    forRowBlocks(
+        [&](std::size_t, int r_begin, int r_end)
         {
-          continue;
-        }
-        bool edge = false;
-        for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
-        {
-          for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
+          for (int r = r_begin; r < r_end; ++r)
           {
-            edge = (rr != r || cc != col) && appeared(rr, cc);
+            for (int col = 0; col < gw; ++col)
+            {
+              const std::size_t c = geometry_.index(r, col);
+              if (occupancy_[c] < p_hit || !appeared(r, col))
+              {
+                continue;
+              }
+              bool edge = false;
+              for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
+              {
+                for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
+                {
+                  edge = (rr != r || cc != col) && appeared(rr, cc);
+                }
+              }
+              if (edge)
+              {
+                motion_evidence_[c] = 1.0F;
+              }
+            }
           }
-        }
-        if (edge)
-        {
-          motion_evidence_[c] = 1.0F;
-        }
-      }
-    }
+        });
     // Ages: scans since the cell last held obstacle points / was seen clearly free.
-    for (std::size_t c = 0; c < cells; ++c)
-    {
-      const int hit_age = occupancy_[c] >= p_hit ? 0 : std::min((ages_[c] & 0xFF) + 1, 255);
-      const int free_age = occupancy_[c] <= kClearlyFree ? 0 : std::min((ages_[c] >> 8) + 1, 255);
-      ages_[c] = static_cast<std::uint16_t>(hit_age | (free_age << 8));
-      occupied_mask_[c] = occupancy_[c] >= p_hit ? 1 : 0;
-    }
+    const auto uw = static_cast<std::size_t>(gw);
+    forRowBlocks(
+        [&](std::size_t, int r_begin, int r_end)
+        {
+          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
+               c < static_cast<std::size_t>(r_end) * uw; ++c)
+          {
+            const int hit_age = occupancy_[c] >= p_hit ? 0 : std::min((ages_[c] & 0xFF) + 1, 255);
+            const int free_age = occupancy_[c] <= kClearlyFree ? 0 : std::min((ages_[c] >> 8) + 1, 255);
+            ages_[c] = static_cast<std::uint16_t>(hit_age | (free_age << 8));
+            occupied_mask_[c] = occupancy_[c] >= p_hit ? 1 : 0;
+          }
+        });
   }
   else
   {
@@ -833,7 +1085,7 @@ void DynamicGridFilter::propagateMotion(float dt)
   // static mass of every such cell measured occupied becomes newborn dynamic mass at the rate
   // propagation_rate (per transition_period) times the source's P(D).
   const std::size_t cells = geometry_.cellCount();
-  std::fill(source_weight_.begin(), source_weight_.end(), 0.0F);
+  parallelFill(parallel_, source_weight_, 0.0F);
   const int w = geometry_.width;
   const int h = geometry_.height;
   const int steps = static_cast<int>(std::ceil(config_.propagation_length / geometry_.resolution));
@@ -894,25 +1146,31 @@ void DynamicGridFilter::propagateMotion(float dt)
     return;
   }
   const float rate = perInterval(config_.propagation_rate, dt, config_.transition_period);
-  for (std::size_t c = 0; c < cells; ++c)
-  {
-    if (source_weight_[c] <= 0.0F || occupancy_[c] <= 0.5F)
-    {
-      continue;
-    }
-    const float moved = rate * source_weight_[c] * cells_.p_static[c];
-    const float before = newborn_[c];
-    cells_.p_static[c] -= moved;
-    cells_.p_dynamic[c] += moved;
-    newborn_[c] = before + moved;
-    const float keep = before / newborn_[c];
-    vacated_share_[c] *= keep;
-    start_share_[c] *= keep;
-    propagated_share_[c] = moved / newborn_[c];
-  }
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * static_cast<std::size_t>(w);
+             c < static_cast<std::size_t>(r_end) * static_cast<std::size_t>(w); ++c)
+        {
+          if (source_weight_[c] <= 0.0F || occupancy_[c] <= 0.5F)
+          {
+            continue;
+          }
+          const float moved = rate * source_weight_[c] * cells_.p_static[c];
+          const float before = newborn_[c];
+          cells_.p_static[c] -= moved;
+          cells_.p_dynamic[c] += moved;
+          newborn_[c] = before + moved;
+          const float keep = before / newborn_[c];
+          vacated_share_[c] *= keep;
+          start_share_[c] *= keep;
+          propagated_share_[c] = moved / newborn_[c];
+        }
+      });
 }
 
-bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy)
+bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy,
+                                       BlockRandom& rng, std::vector<std::int32_t>& candidates) const
 {
   if (vacated_.empty() || dt <= 0.0F)
   {
@@ -925,7 +1183,7 @@ bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float
   const int col = static_cast<int>(cell % static_cast<std::size_t>(w));
   const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
   const float r2 = radius * radius;
-  candidates_.clear();
+  candidates.clear();
   const int b_r0 = std::max(0, (row - reach) / kBucket);
   const int b_r1 = std::min(bucket_rows_ - 1, (row + reach) / kBucket);
   const int b_c0 = std::max(0, (col - reach) / kBucket);
@@ -943,21 +1201,21 @@ bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float
         const float dc = static_cast<float>(v % w - col) * res;
         if (dr * dr + dc * dc <= r2)
         {
-          candidates_.push_back(v);
+          candidates.push_back(v);
         }
       }
     }
   }
-  if (candidates_.empty())
+  if (candidates.empty())
   {
     return false;
   }
-  const auto pick = std::min(static_cast<std::size_t>(uniform() * static_cast<float>(candidates_.size())),
-                             candidates_.size() - 1);
-  const std::int32_t v = candidates_[pick];
+  const auto pick = std::min(static_cast<std::size_t>(rng.uniform() * static_cast<float>(candidates.size())),
+                             candidates.size() - 1);
+  const std::int32_t v = candidates[pick];
   // The particle came from a uniform point of the vacated cell to its own position within dt.
-  const float sx = (static_cast<float>(v % w) + uniform()) * res;
-  const float sy = (static_cast<float>(v / w) + uniform()) * res;
+  const float sx = (static_cast<float>(v % w) + rng.uniform()) * res;
+  const float sy = (static_cast<float>(v / w) + rng.uniform()) * res;
   vx = (x - sx) / dt;
   vy = (y - sy) / dt;
   return true;
@@ -965,107 +1223,171 @@ bool DynamicGridFilter::motionVelocity(std::size_t cell, float x, float y, float
 
 std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
 {
+  // Both samplings are systematic, (u + k) * step for k = 0, 1, ... over the cumulative mass, and
+  // run in blocks: each block sums its mass (in order), the exclusive prefix of these sums (in
+  // block order) is where each block's cumulative mass starts, and an item whose cumulative mass
+  // goes from C0 to C1 takes the samples count(C0) .. count(C1) - 1 (exact slots).
+  // The last item of a block ends at the next block's start, so the blocks tile the samples.
+  BlockRandom cycle_rng(config_.seed, cycle_, kPassCycle, 0);
+  const float u_birth = cycle_rng.uniform();
+  const float u_resample = cycle_rng.uniform();
+
   // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
   // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
   // of cell c weighs newborn_c / n_c, is uniform in the cell, with v ~ N(0, sigma_b^2 I).
-  const std::size_t cells = geometry_.cellCount();
-  double newborn_total = 0.0;
-  for (std::size_t c = 0; c < cells; ++c)
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  const std::size_t row_blocks = blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock);
+  forRowBlocks(
+      [&](std::size_t b, int r_begin, int r_end)
+      {
+        double sum = 0.0;
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * gw; c < static_cast<std::size_t>(r_end) * gw;
+             ++c)
+        {
+          sum += newborn_[c];
+        }
+        block_sum_[b] = sum;
+      });
+  block_start_[0] = 0.0;
+  for (std::size_t b = 0; b < row_blocks; ++b)
   {
-    newborn_total += newborn_[c];
+    block_start_[b + 1] = block_start_[b] + block_sum_[b];
   }
+  const double newborn_total = block_start_[row_blocks];
   const std::size_t capacity = birth_cell_.size();
   born = 0;
   if (newborn_total > 1e-9)
   {
     const double step = newborn_total / static_cast<double>(capacity);
-    double next = uniform() * step;
-    double cumulative = 0.0;
-    for (std::size_t c = 0; c < cells && born < capacity; ++c)
-    {
-      if (newborn_[c] <= 0.0F)
-      {
-        continue;
-      }
-      cumulative += newborn_[c];
-      const std::size_t first = born;
-      while (next < cumulative && born < capacity)
-      {
-        birth_cell_[born++] = static_cast<std::int32_t>(c);
-        next += step;
-      }
-      const std::size_t count = born - first;
-      if (count == 0)
-      {
-        continue;
-      }
-      const float w = newborn_[c] / static_cast<float>(count);
-      const int row = static_cast<int>(c / static_cast<std::size_t>(geometry_.width));
-      const int col = static_cast<int>(c % static_cast<std::size_t>(geometry_.width));
-      const float res = static_cast<float>(geometry_.resolution);
-      const float sb = static_cast<float>(config_.birth_velocity_sigma);
-      const bool appearing = !vacated_.empty() && !previous_mask_[c];
-      const auto fraction = static_cast<float>(config_.birth_motion_fraction);
-      // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity),
-      // vacated (the velocity that left the cell), started (a motion-driven velocity); the rest
-      // takes the cell's velocity estimate where it has persistent particles and motion evidence
-      // (inherit_birth_velocity), a motion-driven velocity in an appearing cell
-      // (birth_motion_fraction), else a random one.
-      const float to_propagated = propagated_share_[c];
-      const float to_vacated = to_propagated + vacated_share_[c];
-      const float to_started = to_vacated + start_share_[c];
-      const bool inherit =
-          config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
-      for (std::size_t k = first; k < born; ++k)
-      {
-        birth_x_[k] = (static_cast<float>(col) + uniform()) * res;
-        birth_y_[k] = (static_cast<float>(row) + uniform()) * res;
-        const float origin = to_started > 0.0F ? uniform() : 1.0F;
-        if (origin < to_propagated)
+    const SystematicSamples samples{u_birth, step, capacity};
+    born = samples.count(newborn_total);
+    const float res = static_cast<float>(geometry_.resolution);
+    const float sb = static_cast<float>(config_.birth_velocity_sigma);
+    const auto fraction = static_cast<float>(config_.birth_motion_fraction);
+    forRowBlocks(
+        [&](std::size_t b, int r_begin, int r_end)
         {
-          birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normal();
-          birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normal();
-        }
-        else if (origin < to_vacated)
-        {
-          birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normal();
-          birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normal();
-        }
-        else if (origin < to_started &&
-                 motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k]))
-        {
-        }
-        else if (inherit)
-        {
-          birth_vx_[k] =
-              cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) * normal();
-          birth_vy_[k] =
-              cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) * normal();
-        }
-        else if (!(appearing && uniform() < fraction &&
-                   motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k])))
-        {
-          birth_vx_[k] = sb * normal();
-          birth_vy_[k] = sb * normal();
-        }
-        birth_w_[k] = w;
-      }
-    }
+          const std::size_t c_begin = static_cast<std::size_t>(r_begin) * gw;
+          std::size_t c_last = static_cast<std::size_t>(r_end) * gw;  // the block's last cell with mass
+          while (c_last > c_begin && newborn_[c_last - 1] <= 0.0F)
+          {
+            --c_last;
+          }
+          if (c_last == c_begin)
+          {
+            return;
+          }
+          --c_last;
+          BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
+          std::vector<std::int32_t>& candidates = block_candidates_[b];
+          const std::size_t block_end = samples.count(block_start_[b + 1]);
+          double cumulative = block_start_[b];
+          std::size_t first = samples.count(cumulative);
+          for (std::size_t c = c_begin; c <= c_last; ++c)
+          {
+            if (newborn_[c] <= 0.0F)
+            {
+              continue;
+            }
+            cumulative += newborn_[c];
+            const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
+            const std::size_t count = end - first;
+            if (count == 0)
+            {
+              continue;
+            }
+            const float w = newborn_[c] / static_cast<float>(count);
+            const int row = static_cast<int>(c / gw);
+            const int col = static_cast<int>(c % gw);
+            const bool appearing = !vacated_.empty() && !previous_mask_[c];
+            // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity),
+            // vacated (the velocity that left the cell), started (a motion-driven velocity); the
+            // rest takes the cell's velocity estimate where it has persistent particles and motion
+            // evidence (inherit_birth_velocity), a motion-driven velocity in an appearing cell
+            // (birth_motion_fraction), else a random one.
+            const float to_propagated = propagated_share_[c];
+            const float to_vacated = to_propagated + vacated_share_[c];
+            const float to_started = to_vacated + start_share_[c];
+            const bool inherit =
+                config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
+            for (std::size_t k = first; k < end; ++k)
+            {
+              birth_cell_[k] = static_cast<std::int32_t>(c);
+              birth_x_[k] = (static_cast<float>(col) + rng.uniform()) * res;
+              birth_y_[k] = (static_cast<float>(row) + rng.uniform()) * res;
+              const float origin = to_started > 0.0F ? rng.uniform() : 1.0F;
+              if (origin < to_propagated)
+              {
+                birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normalSample(rng);
+                birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normalSample(rng);
+              }
+              else if (origin < to_vacated)
+              {
+                birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normalSample(rng);
+                birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normalSample(rng);
+              }
+              else if (origin < to_started && motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k],
+                                                             birth_vy_[k], rng, candidates))
+              {
+              }
+              else if (inherit)
+              {
+                birth_vx_[k] = cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) *
+                                                  normalSample(rng);
+                birth_vy_[k] = cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) *
+                                                  normalSample(rng);
+              }
+              else if (!(appearing && rng.uniform() < fraction &&
+                         motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng,
+                                        candidates)))
+              {
+                birth_vx_[k] = sb * normalSample(rng);
+                birth_vy_[k] = sb * normalSample(rng);
+              }
+              birth_w_[k] = w;
+            }
+            first = end;
+          }
+        });
   }
 
   // Eq. 11: systematic resampling of the persistent and newborn particles to N particles of
-  // equal weight W / N, W = their total weight (the dynamic mass carried stays the same).
+  // equal weight W / N, W = their total weight (the dynamic mass carried stays the same). The
+  // items: the particles, then the newborn ones, in blocks of kParticleBlock.
   ParticleArrays& p = particles_;
   const std::size_t n = p.size();
-  double total = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
+  const std::size_t particle_blocks = blockCount(n, kParticleBlock);
+  const std::size_t item_blocks = particle_blocks + blockCount(born, kParticleBlock);
+  // Item i of block b: weight, and its state.
+  auto itemRange = [&](std::size_t b, std::size_t& begin, std::size_t& end)
   {
-    total += p.weight[i];
-  }
-  for (std::size_t k = 0; k < born; ++k)
+    const std::size_t size = b < particle_blocks ? n : born;
+    begin = (b < particle_blocks ? b : b - particle_blocks) * kParticleBlock;
+    end = std::min(size, begin + kParticleBlock);
+  };
+  parallel_.run(item_blocks,
+                [&](std::size_t b)
+                {
+                  std::size_t begin = 0;
+                  std::size_t end = 0;
+                  itemRange(b, begin, end);
+                  const float* weight = b < particle_blocks ? p.weight.data() : birth_w_.data();
+                  double sum = 0.0;
+                  for (std::size_t i = begin; i < end; ++i)
+                  {
+                    if (weight[i] > 0.0F)
+                    {
+                      sum += weight[i];
+                    }
+                  }
+                  block_sum_[b] = sum;
+                });
+  block_start_[0] = 0.0;
+  for (std::size_t b = 0; b < item_blocks; ++b)
   {
-    total += birth_w_[k];
+    block_start_[b + 1] = block_start_[b] + block_sum_[b];
   }
+  const double total = block_start_[item_blocks];
   if (total <= 1e-12)
   {
     std::fill(p.weight.begin(), p.weight.end(), 0.0F);
@@ -1074,42 +1396,58 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   }
   const double step = total / static_cast<double>(n);
   const auto w_out = static_cast<float>(step);
-  double next = uniform() * step;
-  double cumulative = 0.0;
-  std::size_t out = 0;
+  const SystematicSamples samples{u_resample, step, n};
+  const std::size_t in_use = samples.count(total);
   ParticleArrays& r = resampled_;
-  auto emit = [&](float x, float y, float vx, float vy, float w, std::int32_t cell)
-  {
-    cumulative += w;
-    while (next < cumulative && out < n)
-    {
-      r.x[out] = x;
-      r.y[out] = y;
-      r.vx[out] = vx;
-      r.vy[out] = vy;
-      r.weight[out] = w_out;
-      r.cell[out] = cell;
-      ++out;
-      next += step;
-    }
-  };
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    if (p.weight[i] > 0.0F)
-    {
-      emit(p.x[i], p.y[i], p.vx[i], p.vy[i], p.weight[i], p.cell[i]);
-    }
-  }
-  for (std::size_t k = 0; k < born; ++k)
-  {
-    emit(birth_x_[k], birth_y_[k], birth_vx_[k], birth_vy_[k], birth_w_[k], birth_cell_[k]);
-  }
-  const std::size_t in_use = out;
-  for (; out < n; ++out)  // rounding at the very end: no particle left to copy
-  {
-    r.weight[out] = 0.0F;
-    r.cell[out] = -1;
-  }
+  parallel_.run(item_blocks,
+                [&](std::size_t b)
+                {
+                  std::size_t begin = 0;
+                  std::size_t end = 0;
+                  itemRange(b, begin, end);
+                  const bool newborn = b >= particle_blocks;
+                  const float* x = newborn ? birth_x_.data() : p.x.data();
+                  const float* y = newborn ? birth_y_.data() : p.y.data();
+                  const float* vx = newborn ? birth_vx_.data() : p.vx.data();
+                  const float* vy = newborn ? birth_vy_.data() : p.vy.data();
+                  const float* weight = newborn ? birth_w_.data() : p.weight.data();
+                  const std::int32_t* cell = newborn ? birth_cell_.data() : p.cell.data();
+                  std::size_t last = end;  // the block's last item with weight
+                  while (last > begin && !(weight[last - 1] > 0.0F))
+                  {
+                    --last;
+                  }
+                  if (last == begin)
+                  {
+                    return;
+                  }
+                  --last;
+                  const std::size_t block_end = samples.count(block_start_[b + 1]);
+                  double cumulative = block_start_[b];
+                  std::size_t out = samples.count(cumulative);
+                  for (std::size_t i = begin; i <= last; ++i)
+                  {
+                    if (!(weight[i] > 0.0F))
+                    {
+                      continue;
+                    }
+                    cumulative += weight[i];
+                    const std::size_t out_end =
+                        i == last ? block_end : samples.advance(out, cumulative, block_end);
+                    for (; out < out_end; ++out)
+                    {
+                      r.x[out] = x[i];
+                      r.y[out] = y[i];
+                      r.vx[out] = vx[i];
+                      r.vy[out] = vy[i];
+                      r.weight[out] = w_out;
+                      r.cell[out] = cell[i];
+                    }
+                  }
+                });
+  // Rounding at the very end: no particle left to copy.
+  std::fill(r.weight.begin() + static_cast<std::ptrdiff_t>(in_use), r.weight.end(), 0.0F);
+  std::fill(r.cell.begin() + static_cast<std::ptrdiff_t>(in_use), r.cell.end(), -1);
   std::swap(particles_, resampled_);
   return in_use;
 }

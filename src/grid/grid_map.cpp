@@ -74,18 +74,22 @@ void shiftArray(std::vector<float>& a, int width, int height, std::int64_t d_col
 void shiftCells(CellStates& states, int width, int height, std::int64_t d_col, std::int64_t d_row,
                 float prior_velocity_variance)
 {
+  shiftCells(states, width, height, d_col, d_row, prior_velocity_variance, ParallelBlocks(1));
+}
+
+void shiftCells(CellStates& states, int width, int height, std::int64_t d_col, std::int64_t d_row,
+                float prior_velocity_variance, const ParallelBlocks& parallel)
+{
   if (d_col == 0 && d_row == 0)
   {
     return;
   }
-  shiftArray(states.p_static, width, height, d_col, d_row, 0.0F);
-  shiftArray(states.p_dynamic, width, height, d_col, d_row, 0.0F);
-  shiftArray(states.p_free, width, height, d_col, d_row, 0.0F);
-  shiftArray(states.p_unknown, width, height, d_col, d_row, 1.0F);
-  shiftArray(states.vx, width, height, d_col, d_row, 0.0F);
-  shiftArray(states.vy, width, height, d_col, d_row, 0.0F);
-  shiftArray(states.v_var_x, width, height, d_col, d_row, prior_velocity_variance);
-  shiftArray(states.v_var_y, width, height, d_col, d_row, prior_velocity_variance);
+  // One array per block.
+  std::vector<float>* arrays[] = {&states.p_static, &states.p_dynamic, &states.p_free,  &states.p_unknown,
+                                  &states.vx,       &states.vy,        &states.v_var_x, &states.v_var_y};
+  const float fills[] = {
+      0.0F, 0.0F, 0.0F, 1.0F, 0.0F, 0.0F, prior_velocity_variance, prior_velocity_variance};
+  parallel.run(8, [&](std::size_t k) { shiftArray(*arrays[k], width, height, d_col, d_row, fills[k]); });
 }
 
 }  // namespace grid_vision_fusion

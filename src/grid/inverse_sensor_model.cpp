@@ -125,6 +125,20 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
                                                     const Eigen::Isometry3d& world_from_sensor,
                                                     const GridGeometry& grid, std::vector<float>& occupancy)
 {
+  static const ParallelBlocks serial(1);
+  return compute(cloud, world_from_sensor, grid, occupancy, serial);
+}
+
+InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
+                                                    const Eigen::Isometry3d& world_from_sensor,
+                                                    const GridGeometry& grid, std::vector<float>& occupancy,
+                                                    const ParallelBlocks& parallel)
+{
+  // Blocks of a fixed size (points, sectors, grid rows); per-block counters summed in block order
+  // and per-sector minima / maxima: the result does not depend on the thread count.
+  constexpr std::size_t kPointBlock = 8192;
+  constexpr std::size_t kSectorBlock = 16;
+  constexpr int kRowBlock = 8;
   InverseSensorModelStats stats;
   stats.points = cloud.size();
   const Eigen::Matrix3f rot = world_from_sensor.linear().cast<float>();
@@ -133,46 +147,86 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   const float max_r2 = static_cast<float>(config_.max_range * config_.max_range);
   const float inv_range_res = static_cast<float>(1.0 / config_.range_resolution);
   const auto bins = static_cast<std::size_t>(range_bins_);
+  const auto sectors = static_cast<std::size_t>(sectors_);
 
-  std::fill(bin_min_z_.begin(), bin_min_z_.end(), kInf);
-  std::fill(first_hit_.begin(), first_hit_.end(), kInf);
-  std::fill(farthest_return_.begin(), farthest_return_.end(), 0.0F);
+  parallelFill(parallel, bin_min_z_, kInf);
   const std::size_t n = cloud.size();
   point_bin_.resize(n);
   point_x_.resize(n);
   point_y_.resize(n);
   point_dz_.resize(n);
+  point_cell_.resize(n);
+  const std::size_t point_blocks = blockCount(n, kPointBlock);
+  const std::size_t row_blocks = blockCount(static_cast<std::size_t>(grid.height), kRowBlock);
+  block_stats_.assign(std::max(point_blocks, row_blocks), InverseSensorModelStats());
+  block_first_hit_.resize(point_blocks * sectors);
+  block_farthest_.resize(point_blocks * sectors);
+  auto forPoints = [&](const auto& f)
+  {
+    parallel.run(point_blocks,
+                 [&](std::size_t b) { f(b, b * kPointBlock, std::min(n, (b + 1) * kPointBlock)); });
+  };
+  auto sumStats = [&](std::size_t blocks)
+  {
+    for (std::size_t b = 0; b < blocks; ++b)
+    {
+      const InverseSensorModelStats& s = block_stats_[b];
+      stats.invalid_points += s.invalid_points;
+      stats.out_of_range += s.out_of_range;
+      stats.ground_points += s.ground_points;
+      stats.obstacle_points += s.obstacle_points;
+      stats.overhang_points += s.overhang_points;
+      stats.occupied_cells += s.occupied_cells;
+      block_stats_[b] = InverseSensorModelStats();
+    }
+  };
 
   // Pass 1: points into the world-aligned sensor-centred polar frame; lowest z per bin.
-  std::size_t i = 0;
-  for (std::size_t row = 0; row < cloud.height; ++row)
+  forPoints(
+      [&](std::size_t b, std::size_t begin, std::size_t end)
+      {
+        InverseSensorModelStats& bs = block_stats_[b];
+        std::size_t row = begin / cloud.width;
+        std::size_t col = begin % cloud.width;
+        for (std::size_t i = begin; i < end; ++i, ++col)
+        {
+          if (col == cloud.width)
+          {
+            col = 0;
+            ++row;
+          }
+          const std::uint8_t* p = cloud.data + row * cloud.row_step + col * cloud.point_step;
+          const Eigen::Vector3f ps(readFloat(p + cloud.x_offset), readFloat(p + cloud.y_offset),
+                                   readFloat(p + cloud.z_offset));
+          point_bin_[i] = -1;
+          if (!ps.allFinite())
+          {
+            ++bs.invalid_points;
+            continue;
+          }
+          const Eigen::Vector3f d = rot * ps;
+          const float r2 = d.x() * d.x() + d.y() * d.y();
+          if (r2 < min_r2 || r2 > max_r2)
+          {
+            ++bs.out_of_range;
+            continue;
+          }
+          const int rb = std::min(static_cast<int>(std::sqrt(r2) * inv_range_res), range_bins_ - 1);
+          point_bin_[i] = static_cast<std::int32_t>(static_cast<std::size_t>(sectorOf(d.x(), d.y())) * bins +
+                                                    static_cast<std::size_t>(rb));
+          point_x_[i] = d.x();
+          point_y_[i] = d.y();
+          point_dz_[i] = d.z();
+        }
+      });
+  sumStats(point_blocks);
+  for (std::size_t i = 0; i < n; ++i)  // a minimum: the same in any order
   {
-    const std::uint8_t* p = cloud.data + row * cloud.row_step;
-    for (std::size_t col = 0; col < cloud.width; ++col, ++i, p += cloud.point_step)
+    const std::int32_t bin = point_bin_[i];
+    if (bin >= 0)
     {
-      const Eigen::Vector3f ps(readFloat(p + cloud.x_offset), readFloat(p + cloud.y_offset),
-                               readFloat(p + cloud.z_offset));
-      point_bin_[i] = -1;
-      if (!ps.allFinite())
-      {
-        ++stats.invalid_points;
-        continue;
-      }
-      const Eigen::Vector3f d = rot * ps;
-      const float r2 = d.x() * d.x() + d.y() * d.y();
-      if (r2 < min_r2 || r2 > max_r2)
-      {
-        ++stats.out_of_range;
-        continue;
-      }
-      const int b = std::min(static_cast<int>(std::sqrt(r2) * inv_range_res), range_bins_ - 1);
-      const std::size_t bin =
-          static_cast<std::size_t>(sectorOf(d.x(), d.y())) * bins + static_cast<std::size_t>(b);
-      point_bin_[i] = static_cast<std::int32_t>(bin);
-      point_x_[i] = d.x();
-      point_y_[i] = d.y();
-      point_dz_[i] = d.z();
-      bin_min_z_[bin] = std::min(bin_min_z_[bin], d.z());
+      float& z = bin_min_z_[static_cast<std::size_t>(bin)];
+      z = std::min(z, point_dz_[i]);
     }
   }
 
@@ -182,63 +236,113 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   const float tol = static_cast<float>(config_.ground_tolerance);
   const float slope = static_cast<float>(config_.max_ground_slope);
   const float res = static_cast<float>(config_.range_resolution);
-  for (int s = 0; s < sectors_; ++s)
-  {
-    float g = static_cast<float>(-config_.sensor_height);
-    float r_prev = 0.0F;
-    const std::size_t base = static_cast<std::size_t>(s) * bins;
-    for (int b = 0; b < range_bins_; ++b)
-    {
-      const float z = bin_min_z_[base + static_cast<std::size_t>(b)];
-      const float r = (static_cast<float>(b) + 0.5F) * res;
-      if (z < kInf && std::fabs(z - g) <= tol + slope * (r - r_prev))
-      {
-        g = z;
-        r_prev = r;
-      }
-      ground_z_[base + static_cast<std::size_t>(b)] = g;
-    }
-  }
+  parallel.run(blockCount(sectors, kSectorBlock),
+               [&](std::size_t sb)
+               {
+                 for (std::size_t s = sb * kSectorBlock; s < std::min(sectors, (sb + 1) * kSectorBlock); ++s)
+                 {
+                   float g = static_cast<float>(-config_.sensor_height);
+                   float r_prev = 0.0F;
+                   const std::size_t base = s * bins;
+                   for (int b = 0; b < range_bins_; ++b)
+                   {
+                     const float z = bin_min_z_[base + static_cast<std::size_t>(b)];
+                     const float r = (static_cast<float>(b) + 0.5F) * res;
+                     if (z < kInf && std::fabs(z - g) <= tol + slope * (r - r_prev))
+                     {
+                       g = z;
+                       r_prev = r;
+                     }
+                     ground_z_[base + static_cast<std::size_t>(b)] = g;
+                   }
+                 }
+               });
 
-  // Pass 2: classify points; nearest obstacle hit and farthest return per sector; cells holding
-  // obstacle points.
-  occupancy.assign(grid.cellCount(), 0.5F);
-  cell_hit_.assign(grid.cellCount(), 0);
+  // Pass 2: classify points; nearest obstacle hit and farthest return per sector (per block,
+  // then combined); cells holding obstacle points.
+  occupancy.resize(grid.cellCount());
+  cell_hit_.resize(grid.cellCount());
+  parallelFill(parallel, cell_hit_, std::uint8_t{0});
   const float h_min = static_cast<float>(config_.min_obstacle_height);
   const float h_max = static_cast<float>(config_.max_obstacle_height);
   const double ox = origin.x() - grid.originX();
   const double oy = origin.y() - grid.originY();
   const double inv_cell = 1.0 / grid.resolution;
+  forPoints(
+      [&](std::size_t blk, std::size_t begin, std::size_t end)
+      {
+        InverseSensorModelStats& bs = block_stats_[blk];
+        float* first_hit = block_first_hit_.data() + blk * sectors;
+        float* farthest = block_farthest_.data() + blk * sectors;
+        std::fill(first_hit, first_hit + sectors, kInf);
+        std::fill(farthest, farthest + sectors, 0.0F);
+        for (std::size_t k = begin; k < end; ++k)
+        {
+          point_cell_[k] = -1;
+          const std::int32_t bin = point_bin_[k];
+          if (bin < 0)
+          {
+            continue;
+          }
+          const auto sector = static_cast<std::size_t>(bin) / bins;
+          const float h = point_dz_[k] - ground_z_[static_cast<std::size_t>(bin)];
+          const float r = std::sqrt(point_x_[k] * point_x_[k] + point_y_[k] * point_y_[k]);
+          if (h > h_max)
+          {
+            ++bs.overhang_points;
+            continue;
+          }
+          farthest[sector] = std::max(farthest[sector], r);
+          if (h < h_min)
+          {
+            ++bs.ground_points;
+            continue;
+          }
+          ++bs.obstacle_points;
+          first_hit[sector] = std::min(first_hit[sector], r);
+          const double fc = std::floor((ox + point_x_[k]) * inv_cell);
+          const double fr = std::floor((oy + point_y_[k]) * inv_cell);
+          if (fc >= 0.0 && fr >= 0.0 && fc < grid.width && fr < grid.height)
+          {
+            point_cell_[k] =
+                static_cast<std::int32_t>(grid.index(static_cast<int>(fr), static_cast<int>(fc)));
+          }
+        }
+      });
+  sumStats(point_blocks);
+  parallel.run(blockCount(sectors, kSectorBlock),
+               [&](std::size_t sb)
+               {
+                 for (std::size_t s = sb * kSectorBlock; s < std::min(sectors, (sb + 1) * kSectorBlock); ++s)
+                 {
+                   float hit = kInf;
+                   float far = 0.0F;
+                   for (std::size_t b = 0; b < point_blocks; ++b)
+                   {
+                     hit = std::min(hit, block_first_hit_[b * sectors + s]);
+                     far = std::max(far, block_farthest_[b * sectors + s]);
+                   }
+                   first_hit_[s] = hit;
+                   farthest_return_[s] = far;
+                 }
+               });
   for (std::size_t k = 0; k < n; ++k)
   {
-    const std::int32_t bin = point_bin_[k];
-    if (bin < 0)
+    if (point_cell_[k] >= 0)
     {
-      continue;
-    }
-    const auto sector = static_cast<std::size_t>(bin) / bins;
-    const float h = point_dz_[k] - ground_z_[static_cast<std::size_t>(bin)];
-    const float r = std::sqrt(point_x_[k] * point_x_[k] + point_y_[k] * point_y_[k]);
-    if (h > h_max)
-    {
-      ++stats.overhang_points;
-      continue;
-    }
-    farthest_return_[sector] = std::max(farthest_return_[sector], r);
-    if (h < h_min)
-    {
-      ++stats.ground_points;
-      continue;
-    }
-    ++stats.obstacle_points;
-    first_hit_[sector] = std::min(first_hit_[sector], r);
-    const double fc = std::floor((ox + point_x_[k]) * inv_cell);
-    const double fr = std::floor((oy + point_y_[k]) * inv_cell);
-    if (fc >= 0.0 && fr >= 0.0 && fc < grid.width && fr < grid.height)
-    {
-      cell_hit_[grid.index(static_cast<int>(fr), static_cast<int>(fc))] = 1;
+      cell_hit_[static_cast<std::size_t>(point_cell_[k])] = 1;
     }
   }
+
+  auto forRows = [&](const auto& f)
+  {
+    parallel.run(row_blocks,
+                 [&](std::size_t b)
+                 {
+                   const int r0 = static_cast<int>(b) * kRowBlock;
+                   f(b, r0, std::min(grid.height, r0 + kRowBlock));
+                 });
+  };
 
   // Cells next to a hit are never free (hit_neighbours_not_free): a 3x3 dilation of the hits,
   // as a horizontal then a vertical pass.
@@ -246,29 +350,41 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   {
     const int w = grid.width;
     const int h = grid.height;
-    near_hit_.assign(grid.cellCount(), 0);
-    for (int row = 0; row < h; ++row)
-    {
-      const std::uint8_t* in = cell_hit_.data() + grid.index(row, 0);
-      std::uint8_t* out = near_hit_.data() + grid.index(row, 0);
-      for (int col = 0; col < w; ++col)
-      {
-        out[col] = static_cast<std::uint8_t>(in[col] | (col > 0 ? in[col - 1] : 0) |
-                                             (col + 1 < w ? in[col + 1] : 0));
-      }
-    }
-    for (int col = 0; col < w; ++col)
-    {
-      std::uint8_t above = 0;
-      for (int row = 0; row < h; ++row)
-      {
-        const std::size_t idx = grid.index(row, col);
-        const std::uint8_t here = near_hit_[idx];
-        const std::uint8_t below = row + 1 < h ? near_hit_[idx + static_cast<std::size_t>(w)] : 0;
-        near_hit_[idx] = static_cast<std::uint8_t>(here | above | below);
-        above = here;
-      }
-    }
+    near_hit_.resize(grid.cellCount());
+    forRows(
+        [&](std::size_t, int r_begin, int r_end)
+        {
+          for (int row = r_begin; row < r_end; ++row)
+          {
+            const std::uint8_t* in = cell_hit_.data() + grid.index(row, 0);
+            std::uint8_t* out = near_hit_.data() + grid.index(row, 0);
+            for (int col = 0; col < w; ++col)
+            {
+              out[col] = static_cast<std::uint8_t>(in[col] | (col > 0 ? in[col - 1] : 0) |
+                                                   (col + 1 < w ? in[col + 1] : 0));
+            }
+          }
+        });
+    constexpr int kColumnBlock = 64;
+    parallel.run(blockCount(static_cast<std::size_t>(w), kColumnBlock),
+                 [&](std::size_t b)
+                 {
+                   const int c0 = static_cast<int>(b) * kColumnBlock;
+                   const int c1 = std::min(w, c0 + kColumnBlock);
+                   for (int col = c0; col < c1; ++col)
+                   {
+                     std::uint8_t above = 0;
+                     for (int row = 0; row < h; ++row)
+                     {
+                       const std::size_t idx = grid.index(row, col);
+                       const std::uint8_t here = near_hit_[idx];
+                       const std::uint8_t below =
+                           row + 1 < h ? near_hit_[idx + static_cast<std::size_t>(w)] : 0;
+                       near_hit_[idx] = static_cast<std::uint8_t>(here | above | below);
+                       above = here;
+                     }
+                   }
+                 });
   }
   const bool protect = config_.hit_neighbours_not_free;
 
@@ -287,43 +403,50 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   const float cell = static_cast<float>(grid.resolution);
   const float min_r = static_cast<float>(config_.min_range);
   const float max_r = static_cast<float>(config_.max_range);
-  for (int row = 0; row < grid.height; ++row)
-  {
-    const float dy = static_cast<float>((row + 0.5) * grid.resolution - oy);
-    const std::size_t base = grid.index(row, 0);
-    for (int col = 0; col < grid.width; ++col)
-    {
-      const std::size_t idx = base + static_cast<std::size_t>(col);
-      if (cell_hit_[idx])
+  forRows(
+      [&](std::size_t blk, int r_begin, int r_end)
       {
-        occupancy[idx] = p_occ;
-        ++stats.occupied_cells;
-        continue;
-      }
-      const float dx = (static_cast<float>(col) + 0.5F) * cell - static_cast<float>(ox);
-      const float r = std::sqrt(dx * dx + dy * dy);
-      if (r < min_r || r > max_r)
-      {
-        continue;
-      }
-      const auto sector = static_cast<std::size_t>(sectorOf(dx, dy));
-      const float hit = first_hit_[sector];
-      if (hit < kInf)
-      {
-        const float d = r - hit;
-        const float g = std::fabs(d) < band ? std::exp(-d * d * inv_two_s2) : 0.0F;
-        occupancy[idx] = d < 0.0F ? p_fr + (p_occ - p_fr) * g : 0.5F + (p_occ - 0.5F) * g;
-      }
-      else if (r <= farthest_return_[sector])
-      {
-        occupancy[idx] = p_fr;
-      }
-      if (protect && near_hit_[idx] && occupancy[idx] < 0.5F)
-      {
-        occupancy[idx] = 0.5F;
-      }
-    }
-  }
+        InverseSensorModelStats& bs = block_stats_[blk];
+        for (int row = r_begin; row < r_end; ++row)
+        {
+          const float dy = static_cast<float>((row + 0.5) * grid.resolution - oy);
+          const std::size_t base = grid.index(row, 0);
+          for (int col = 0; col < grid.width; ++col)
+          {
+            const std::size_t idx = base + static_cast<std::size_t>(col);
+            float p = 0.5F;
+            if (cell_hit_[idx])
+            {
+              occupancy[idx] = p_occ;
+              ++bs.occupied_cells;
+              continue;
+            }
+            const float dx = (static_cast<float>(col) + 0.5F) * cell - static_cast<float>(ox);
+            const float r = std::sqrt(dx * dx + dy * dy);
+            if (r >= min_r && r <= max_r)
+            {
+              const auto sector = static_cast<std::size_t>(sectorOf(dx, dy));
+              const float hit = first_hit_[sector];
+              if (hit < kInf)
+              {
+                const float d = r - hit;
+                const float g = std::fabs(d) < band ? std::exp(-d * d * inv_two_s2) : 0.0F;
+                p = d < 0.0F ? p_fr + (p_occ - p_fr) * g : 0.5F + (p_occ - 0.5F) * g;
+              }
+              else if (r <= farthest_return_[sector])
+              {
+                p = p_fr;
+              }
+              if (protect && near_hit_[idx] && p < 0.5F)
+              {
+                p = 0.5F;
+              }
+            }
+            occupancy[idx] = p;
+          }
+        }
+      });
+  sumStats(row_blocks);
   return stats;
 }
 

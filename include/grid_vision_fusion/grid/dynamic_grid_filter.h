@@ -8,12 +8,12 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "grid_vision_fusion/grid/grid_map.h"
 #include "grid_vision_fusion/grid/inverse_sensor_model.h"
+#include "grid_vision_fusion/grid/parallel_blocks.h"
 
 namespace grid_vision_fusion
 {
@@ -56,7 +56,11 @@ struct DynamicGridConfig
   /// free now) at most birth_motion_speed * dt away [m/s] (>=0; 0 disables).
   double birth_motion_speed = 20.0;
   double birth_motion_fraction = 0.5;  ///< share of such newborn particles [0, 1]
-  std::uint32_t seed = 42;             ///< seed of the std::mt19937 (same seed + input = same output)
+  /// Seed of the random streams (same seed + input = same output, whatever `threads`).
+  std::uint32_t seed = 42;
+  /// Threads of the sensor model and the filter passes (0 = all cores, 1 = serial); the output
+  /// does not depend on it (doc/grid_filter.md, "Determinism") (0..256).
+  int threads = 0;
 
   // --- motion evidence (doc/grid_filter.md, "Motion evidence"). The previous reconstruction is
   // vacated_to_dynamic = false, motion_window = 0, unknown_to_dynamic_by_motion,
@@ -146,8 +150,9 @@ struct ParticleArrays
   std::size_t size() const { return weight.size(); }
 };
 
-/// The dynamic occupancy grid filter. Not thread-safe; single-threaded and deterministic for a
-/// given seed and input sequence.
+/// The dynamic occupancy grid filter. Not thread-safe (one caller at a time); its passes run on
+/// config.threads threads, and its output is bit-identical for a given seed and input sequence
+/// whatever the thread count.
 class DynamicGridFilter
 {
 public:
@@ -162,7 +167,7 @@ public:
   DynamicGridCycle update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
                           double stamp);
 
-  /// Forgets everything: all cells unknown, no particle, the generator re-seeded.
+  /// Forgets everything: all cells unknown, no particle, the random streams restarted.
   void reset();
 
   const DynamicGridConfig& config() const { return config_; }
@@ -189,7 +194,14 @@ public:
 
 private:
   void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
+  /// f(block, first_row, end_row) for the blocks of grid rows, in parallel (parallel_).
+  template <typename F>
+  void forRowBlocks(const F& f) const;
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
+  /// With several threads: particle indices (cell >= 0) sorted by band of cell rows, stably, so
+  /// that per-cell sums over a band's particles add in particle order (as one thread does).
+  /// `counted`: block_counts_ already holds the particles per (particle block, band).
+  void sortParticlesByBand(bool counted);
   std::size_t birthAndResample(std::size_t& born, float dt);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
@@ -197,12 +209,12 @@ private:
   /// a moving cell becomes newborn dynamic mass with that cell's velocity.
   void propagateMotion(float dt);
   /// Velocity of a newborn particle at (x, y) of cell `cell` from a random vacated cell within
-  /// birth_motion_speed * dt; false when there is none.
-  bool motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy);
-  float normal();
-  float uniform();
+  /// birth_motion_speed * dt; false when there is none. `candidates`: scratch.
+  bool motionVelocity(std::size_t cell, float x, float y, float dt, float& vx, float& vy, BlockRandom& rng,
+                      std::vector<std::int32_t>& candidates) const;
 
   DynamicGridConfig config_;
+  ParallelBlocks parallel_;
   InverseSensorModel sensor_model_;
   GridGeometry geometry_;
   CellStates cells_;
@@ -238,13 +250,18 @@ private:
   std::vector<std::int32_t> vacated_;        // cells occupied in the previous scan, free now
   std::vector<std::int32_t> bucket_start_;   // vacated_ sorted by bucket: first index per bucket
   std::vector<std::int32_t> bucket_cells_;
-  std::vector<std::int32_t> candidates_;  // scratch: vacated cells near one birth cell
+  std::vector<std::int32_t> candidates_;  // scratch: bucket fill positions
+  // block scratch: partial sums and their exclusive prefix (block order), per-block counts
+  std::vector<double> block_sum_;
+  std::vector<double> block_start_;
+  std::vector<std::size_t> block_counts_;
+  std::vector<std::uint32_t> band_order_;  // particle indices sorted by band (sortParticlesByBand)
+  std::vector<std::size_t> band_start_;    // first index of band_order_ per band
+  std::vector<std::vector<std::int32_t>> block_candidates_;  // per row block: vacated cells, candidates
   int bucket_cols_ = 0;
   int bucket_rows_ = 0;
   bool have_previous_ = false;
-  std::mt19937 rng_;
-  std::uint32_t normal_bits_ = 0;
-  bool normal_has_spare_ = false;
+  std::uint64_t cycle_ = 0;  // cycles since the last reset: part of every random stream's seed
   bool initialised_ = false;
   double last_stamp_ = 0.0;
   double ground_z_ = 0.0;

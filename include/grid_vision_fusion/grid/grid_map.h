@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "grid_vision_fusion/grid/parallel_blocks.h"
+
 namespace grid_vision_fusion
 {
 /// Geometry of a square-celled grid whose axes are aligned with the fixed frame. The grid lies
@@ -61,5 +63,8 @@ struct CellStates
 /// cells; cells that enter the grid are set to unknown (see CellStates::reset).
 void shiftCells(CellStates& states, int width, int height, std::int64_t d_col, std::int64_t d_row,
                 float prior_velocity_variance);
+/// The same, one array per block on the threads of `parallel` (the same result).
+void shiftCells(CellStates& states, int width, int height, std::int64_t d_col, std::int64_t d_row,
+                float prior_velocity_variance, const ParallelBlocks& parallel);
 
 }  // namespace grid_vision_fusion

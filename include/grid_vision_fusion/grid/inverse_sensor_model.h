@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/grid/grid_map.h"
+#include "grid_vision_fusion/grid/parallel_blocks.h"
 
 namespace grid_vision_fusion
 {
@@ -71,7 +72,8 @@ struct InverseSensorModelStats
 };
 
 /// Computes, for every cell of a grid, the probability p_o that the cell is occupied given one
-/// scan. Keeps its buffers between scans (no allocation in steady state). Not thread-safe.
+/// scan. Keeps its buffers between scans (no allocation in steady state). Not thread-safe (one
+/// caller at a time); compute() may run its passes on several threads, with the same result.
 class InverseSensorModel
 {
 public:
@@ -85,6 +87,11 @@ public:
   /// no information) and returns the counters.
   InverseSensorModelStats compute(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
                                   const GridGeometry& grid, std::vector<float>& occupancy);
+  /// The same on the threads of `parallel` (blocks of points, sectors and grid rows); the result
+  /// does not depend on the thread count.
+  InverseSensorModelStats compute(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
+                                  const GridGeometry& grid, std::vector<float>& occupancy,
+                                  const ParallelBlocks& parallel);
 
   /// Ground height estimate of the last scan at horizontal range `range` [m] in the sector of
   /// the fixed-frame azimuth `azimuth` [rad], relative to the sensor origin [m].
@@ -105,8 +112,12 @@ private:
   std::vector<float> point_dz_;          // per point: z relative to the sensor, world-aligned
   std::vector<float> point_x_;           // per point: x relative to the sensor, world-aligned
   std::vector<float> point_y_;
-  std::vector<std::uint8_t> cell_hit_;  // per cell: holds obstacle points
-  std::vector<std::uint8_t> near_hit_;  // per cell: a cell of its 3x3 neighbourhood holds obstacle points
+  std::vector<std::uint8_t> cell_hit_;    // per cell: holds obstacle points
+  std::vector<std::uint8_t> near_hit_;    // per cell: a cell of its 3x3 neighbourhood holds obstacle points
+  std::vector<std::int32_t> point_cell_;  // per point: cell of an obstacle point, -1 otherwise
+  std::vector<InverseSensorModelStats> block_stats_;  // counters per block, summed in block order
+  std::vector<float> block_first_hit_;                // per (point block, sector), min-combined
+  std::vector<float> block_farthest_;                 // per (point block, sector), max-combined
 };
 
 /// atan2 with |error| < 1e-5 rad, branch-light (used for points and cells alike so that they

@@ -97,6 +97,7 @@ void visitParams(DynamicGridParams& p, Visitor& v)
   v("propagation_rate", c.propagation_rate);
   v("propagation_length", c.propagation_length);
   v("seed", c.seed);
+  v("threads", c.threads);
   v("dynamic_threshold", c.dynamic_threshold);
   v("min_dynamic_speed", c.min_dynamic_speed);
   v("mahalanobis_threshold", c.mahalanobis_threshold);
