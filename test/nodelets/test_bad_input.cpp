@@ -576,7 +576,7 @@ std::vector<Case> cases()
            }),
        "camera image size must be > 0", "projection/skipped"},
       {"ImageStepTooSmall", "yolo_detector", badImage([](sensor_msgs::Image& i) { i.step = 64; }),
-       "step 64 < width * bytes per pixel 192", "yolo/detect"},
+       "step 64 < width * bytes per pixel = 192", "yolo/detect"},
       {"CameraInfoForAnotherImageSize", "fusion",
        badPair(
            [](Detection2DArray&, ProjectedGrid& p)
