@@ -5,6 +5,9 @@
 // and the machine's peak.
 //
 // Run: devel/lib/grid_vision_fusion/bench_yolo [--benchmark_filter=tiny]
+//      devel/lib/grid_vision_fusion/bench_yolo --write-weights DIR   (writes yolov3-tiny.weights
+//      and yolov3.weights with these random values into DIR and exits: for run_pipeline
+//      --benchmark with a real network architecture)
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
@@ -124,6 +127,23 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
 
 int main(int argc, char** argv)
 {
+  if (argc == 3 && std::string(argv[1]) == "--write-weights")
+  {
+    try
+    {
+      std::filesystem::create_directories(argv[2]);
+      for (const char* cfg : {"/yolov3-tiny.cfg", "/yolov3.cfg"})
+      {
+        std::printf("%s\n", writeRandomWeights(kCfgDir + cfg, argv[2]).c_str());
+      }
+      return 0;
+    }
+    catch (const std::exception& e)
+    {
+      std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+      return 1;
+    }
+  }
   const MachineInfo peak = machineInfo();
   cv::setNumThreads(peak.cores);
   std::ostringstream peak_text;
