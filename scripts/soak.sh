@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# Soak test of the nodelet chain (doc/reliability.md): kitti_replay.launch at real-time rate with
+# the replay detector over a long synthetic drive (config/synthetic_drive_long.yaml: 3000 frames),
+# watched by scripts/soak_monitor.py. Passes when no camera frame is lost between the bag and
+# the objects, the nodelet manager's resident memory grows by less than 5 % between frame 500
+# and the end, and no ERROR is logged. Images before the chain's first output (no grid exists yet)
+# are counted apart.
+#
+# Usage: scripts/soak.sh [--output DIR] [--scenario FILE] [--rate R] [--keep]
+#   --output DIR     work and result folder (default: soak_output/ in the repository)
+#   --scenario FILE  the drive (default: config/synthetic_drive_long.yaml)
+#   --rate R         rosbag play rate (default 1: real time)
+#   --keep           keep the drive and the bag (several GB for the default drive)
+# Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames), DIR/replay.log.
+set -eo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+workspace=${GVF_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/grid_vision_fusion/workspace}
+out=$root/soak_output
+scenario=$root/config/synthetic_drive_long.yaml
+rate=1.0
+keep=false
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --output) out=$(realpath -m "$2"); shift ;;
+    --scenario) scenario=$(realpath "$2"); shift ;;
+    --rate) rate=$2; shift ;;
+    --keep) keep=true ;;
+    -h | --help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "soak: unknown argument $1 (see --help)" >&2; exit 2 ;;
+  esac
+  shift
+done
+export PATH=/usr/bin:/bin:$PATH
+
+GVF_WORKSPACE=$workspace GVF_BUILD_TESTS=0 "$root/scripts/build.sh" >/dev/null
+# shellcheck disable=SC1091
+source "$workspace/devel/setup.bash"
+rm -rf "$out" && mkdir -p "$out"
+drive=$out/kitti/2011_09_26/2011_09_26_drive_9003_sync
+
+echo "[soak] writing the drive of $scenario"
+start=$SECONDS
+rosrun grid_vision_fusion make_synthetic_drive --scenario "$scenario" --output "$out/kitti" --drive 9003
+rosrun grid_vision_fusion kitti_to_bag --quiet --compression lz4 "$drive" "$out/drive.bag"
+rm -rf "$drive/velodyne_points/data" "$drive/image_02/data"
+echo "[soak] drive and bag written in $((SECONDS - start)) s"
+
+port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://localhost:$port
+echo "[soak] kitti_replay.launch at rate $rate (roslaunch on port $port, log in $out/replay.log)"
+roslaunch -p "$port" grid_vision_fusion kitti_replay.launch bag:="$out/drive.bag" rate:="$rate" \
+  replay_directory:="$drive/label_2" start_delay:=10 >"$out/replay.log" 2>&1 &
+launch=$!
+manager=""
+for _ in $(seq 60); do  # the manager's process, once roslaunch has started it
+  manager=$(pgrep -f "nodelet manager __name:=perception_manager" | head -n1 || true)
+  [[ -n "$manager" ]] && break
+  sleep 0.5
+done
+[[ -n "$manager" ]] || { kill "$launch"; echo "soak: the nodelet manager did not start: see $out/replay.log" >&2; exit 1; }
+python3 "$root/scripts/soak_monitor.py" --manager-pid "$manager" --samples "$out/memory.csv" \
+  --summary "$out/monitor.json"
+wait "$launch" || true
+[[ "$keep" == true ]] || rm -rf "$out/drive.bag" "$out/kitti"
+
+python3 - "$out" <<'PY'
+import csv, json, sys
+out = sys.argv[1]
+monitor = json.load(open(out + "/monitor.json"))
+rows = [r for r in csv.DictReader(open(out + "/memory.csv"))]
+after_500 = [float(r["manager_rss_mib"]) for r in rows if int(r["objects_messages"]) >= 500]
+growth = 100.0 * (after_500[-1] - after_500[0]) / after_500[0] if len(after_500) > 1 else float("nan")
+lost = monitor["frames_lost"]
+figures = dict(monitor, rss_frame_500_mib=after_500[0] if after_500 else None,
+               rss_end_mib=after_500[-1] if after_500 else None, rss_growth_percent=growth)
+json.dump(figures, open(out + "/soak.json", "w"), indent=1)
+print("[soak] images %d, detections %d, objects %d: %d frames lost after the first output "
+      "(%d images before it)" % (monitor["images"], monitor["detections"], monitor["objects"], lost,
+                                 monitor["images_before_first_output"]))
+print("[soak] manager resident memory frame 500 -> end: %s -> %s MiB (%+.1f %%)" %
+      (figures["rss_frame_500_mib"], figures["rss_end_mib"], growth))
+print("[soak] errors logged: %d" % len(monitor["errors"]))
+for line in monitor["errors"][:20]:
+    print("  " + line)
+ok = lost == 0 and monitor["images"] > 0 and growth < 5.0 and not monitor["errors"]
+print("[soak] %s" % ("passed" if ok else "FAILED"))
+sys.exit(0 if ok else 1)
+PY

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Watches a running nodelet chain for scripts/soak.sh: counts the camera images, detections and
+objects messages, samples the nodelet manager's resident memory, and collects every ERROR or
+FATAL that reaches /rosout. Writes CSV samples and a JSON summary when the bag has been played
+(the player's node leaves the graph) or on SIGINT.
+"""
+import argparse
+import json
+import os
+import signal
+import struct
+import time
+
+import rosgraph
+import rospy
+from rosgraph_msgs.msg import Log
+
+
+def header_stamp(msg):
+    """The header stamp of a serialized message that starts with a std_msgs/Header."""
+    _seq, secs, nsecs = struct.unpack_from("<III", msg._buff, 0)
+    return secs * 1000000000 + nsecs
+
+
+def resident_mib(pid):
+    with open("/proc/%d/status" % pid) as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--manager-pid", type=int, required=True)
+    parser.add_argument("--image", default="/kitti/camera_color_left/image_raw")
+    parser.add_argument("--samples", required=True, help="CSV file of the memory samples")
+    parser.add_argument("--summary", required=True, help="JSON summary file")
+    parser.add_argument("--every", type=int, default=100, help="objects messages between samples")
+    parser.add_argument("--player", default="/player", help="node that plays the bag")
+    args = parser.parse_args(rospy.myargv()[1:])
+
+    counts = {"images": 0, "detections": 0, "objects": 0}
+    stamps = {"images": set(), "objects": set()}
+    errors = []
+    samples = open(args.samples, "w")
+    samples.write("objects_messages,wall_s,manager_rss_mib\n")
+    start = time.time()
+
+    def counter(name):
+        def callback(msg):
+            counts[name] += 1
+            if name in stamps:
+                stamps[name].add(header_stamp(msg))
+            if name == "objects" and counts["objects"] % args.every == 0:
+                samples.write("%d,%.1f,%.2f\n" % (counts["objects"], time.time() - start,
+                                                  resident_mib(args.manager_pid)))
+                samples.flush()
+        return callback
+
+    def on_log(msg):
+        if msg.level >= Log.ERROR:
+            errors.append("%s: %s" % (msg.name, msg.msg))
+
+    rospy.init_node("soak_monitor", disable_signals=True)
+    rospy.Subscriber(args.image, rospy.AnyMsg, counter("images"), queue_size=100)
+    rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=100)
+    rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=100)
+    rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000)
+
+    stop = {"now": False}
+    signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
+    signal.signal(signal.SIGTERM, lambda *_: stop.update(now=True))
+    master = rosgraph.Master("/soak_monitor")
+    seen_player = False
+    while not stop["now"]:
+        time.sleep(1.0)
+        try:
+            nodes = {n for group in master.getSystemState() for _, names in group for n in names}
+            alive = args.player in nodes
+        except Exception:  # the master went away: the launch has ended
+            alive = False
+        seen_player = seen_player or alive
+        if seen_player and not alive:
+            time.sleep(3.0)  # the last messages in flight
+            break
+    # Images before the chain's first output met a chain still starting (no grid yet).
+    first = min(stamps["objects"]) if stamps["objects"] else None
+    lost = sorted(t for t in stamps["images"] if first is not None and t > first and t not in stamps["objects"])
+    summary = dict(counts, errors=errors, wall_s=time.time() - start,
+                   images_before_first_output=sum(1 for t in stamps["images"] if first is None or t < first),
+                   frames_lost=len(lost), lost_stamps_ns=lost[:100])
+    with open(args.summary, "w") as out:
+        json.dump(summary, out, indent=1)
+    samples.close()
+    # rospy's threads may block on a master that has gone: leave without waiting for them.
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main()
