@@ -26,7 +26,7 @@ while [[ $# -gt 0 ]]; do
     --scenario) scenario=$(realpath "$2"); shift ;;
     --rate) rate=$2; shift ;;
     --keep) keep=true ;;
-    -h | --help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "soak: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
   shift
