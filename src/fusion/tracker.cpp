@@ -55,6 +55,11 @@ void TrackerConfig::validate() const
     throw std::invalid_argument("motion_switch_evidence must be in (0, motion_evidence_limit], got " +
                                 std::to_string(motion_switch_evidence));
   }
+  if (!std::isfinite(robust_sigma) || robust_sigma < 0.0)
+  {
+    throw std::invalid_argument("track_robust_sigma must be a finite value >= 0, got " +
+                                std::to_string(robust_sigma));
+  }
   if (!std::isfinite(speed_evidence) || speed_evidence < 0.0)
   {
     throw std::invalid_argument("motion_speed_evidence must be a finite value >= 0, got " +
@@ -124,7 +129,15 @@ void Tracker::predict(Track& track, double dt) const
 
 void Tracker::correct(Track& track, const TrackObservation& observation) const
 {
-  const double rp = config_.position_sigma * config_.position_sigma;
+  double rp = config_.position_sigma * config_.position_sigma;
+  // Huber: beyond robust_sigma the position counts with weight robust_sigma / d (its noise
+  // inflated by (d / robust_sigma)²), so that a jump of the centre estimate moves the track, and
+  // feeds its speed, less than a steady displacement does.
+  const double d = std::sqrt(positionDistance2(track, observation));
+  if (config_.robust_sigma > 0.0 && d > config_.robust_sigma)
+  {
+    rp *= (d / config_.robust_sigma) * (d / config_.robust_sigma);
+  }
   if (observation.has_velocity)
   {
     const Eigen::Vector4d z(observation.x, observation.y, observation.vx, observation.vy);

@@ -297,6 +297,34 @@ TEST(Tracker, OverlappingBoxesPassTheGateWhenThePositionJumps)
   EXPECT_NE(tracker.update(0.6, {observe("van", 35.0, 1.0, 900.F)})[0].id, 1U);
 }
 
+// A parked car observed at x = 10 for 1 s, then once 1.5 m off (its centre estimate jumped)
+// and back: the robust update moves the track and its speed less than the plain one, and a
+// steady displacement still moves it.
+TEST(Tracker, TheRobustUpdateDiscountsAJumpOfThePosition)
+{
+  auto run = [](double robust_sigma, double jump_x)
+  {
+    TrackerConfig config;
+    config.robust_sigma = robust_sigma;
+    Tracker tracker(config);
+    double t = 0.0;
+    for (int k = 0; k < 10; ++k, t += kFramePeriodS)
+    {
+      tracker.update(t, {observe("car", 10.0, 0.0, 300.F)});
+    }
+    return tracker.update(t, {observe("car", jump_x, 0.0, 300.F)}).at(0);
+  };
+  const TrackEstimate plain = run(0.0, 11.5);
+  const TrackEstimate robust = run(2.0, 11.5);
+  ASSERT_TRUE(plain.confirmed);
+  ASSERT_TRUE(robust.confirmed);
+  EXPECT_GT(plain.x - 10.0, 0.3);
+  EXPECT_LT(robust.x - 10.0, 0.8 * (plain.x - 10.0));
+  EXPECT_LT(std::abs(robust.vx), 0.8 * std::abs(plain.vx));
+  // Within robust_sigma the update is the plain one.
+  EXPECT_DOUBLE_EQ(run(2.0, 10.2).x, run(0.0, 10.2).x);
+}
+
 TEST(Tracker, TimeGoingBackOrAGapResetsTheTracks)
 {
   Tracker tracker;
@@ -327,6 +355,7 @@ TEST(Tracker, ConfigValidation)
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.speed_evidence = -1.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion_speed_window = 0.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion_min_dwell = -1.0; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.robust_sigma = -0.5; })), std::invalid_argument);
   Tracker tracker;
   EXPECT_THROW(tracker.setConfig(bad([](TrackerConfig& c) { c.max_gap = 0.0; })), std::invalid_argument);
   EXPECT_DOUBLE_EQ(tracker.config().max_gap, TrackerConfig{}.max_gap);

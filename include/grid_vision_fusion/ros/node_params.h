@@ -252,6 +252,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("track_velocity_sigma", t.velocity_sigma);
   v("track_initial_speed_sigma", t.initial_speed_sigma);
   v("track_max_gap", t.max_gap);
+  v("track_robust_sigma", t.robust_sigma);
   v("motion_evidence_limit", t.motion_evidence_limit);
   v("motion_switch_evidence", t.motion_switch_evidence);
   v("motion_min_dwell", t.motion_min_dwell);
