@@ -13,6 +13,7 @@
 #include "grid_vision_fusion/ros/fusion_stage.h"
 #include "grid_vision_fusion/ros/grid_stage.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
+#include "grid_vision_fusion/ros/sensor_views.h"
 
 namespace grid_vision_fusion
 {
@@ -166,6 +167,34 @@ TEST(DetectorStage, ReplaysLabelsInStepWithTheImagesAndOneThresholdServesBothBac
 
   params.backend = "magic";
   EXPECT_THROW(DetectorStage{params}, std::invalid_argument);
+}
+
+TEST(DetectorStage, TheImageViewChecksEncodingStepAndDataLength)
+{
+  sensor_msgs::Image image;
+  image.encoding = "rgb8";
+  image.width = 4;
+  image.height = 3;
+  image.step = 12;
+  image.data.assign(36, 7);
+  cv::Mat pixels;
+  PixelFormat format = PixelFormat::kBgr8;
+  ASSERT_EQ(imageViewOf(image, pixels, format), "");
+  EXPECT_EQ(format, PixelFormat::kRgb8);
+  EXPECT_EQ(pixels.type(), CV_8UC3);
+  EXPECT_EQ(pixels.data, image.data.data());  // a view, not a copy
+  EXPECT_EQ(pixels.step, 12U);
+
+  image.data.resize(35);  // the last row one byte short
+  EXPECT_NE(imageViewOf(image, pixels, format).find("data holds 35 bytes, step * height needs 36"),
+            std::string::npos);
+  image.step = 11;  // shorter than a row of 4 rgb8 pixels
+  EXPECT_NE(imageViewOf(image, pixels, format).find("step 11 < width"), std::string::npos);
+  image.encoding = "rgba8";
+  EXPECT_NE(imageViewOf(image, pixels, format).find("\"rgba8\" is not supported"), std::string::npos);
+  image.encoding = "mono8";
+  image.height = 0;
+  EXPECT_NE(imageViewOf(image, pixels, format).find("image is empty"), std::string::npos);
 }
 
 TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
