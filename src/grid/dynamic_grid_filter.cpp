@@ -12,6 +12,18 @@ namespace grid_vision_fusion
 {
 namespace
 {
+/// start[b] = sum[0] + … + sum[b − 1] for b = 0 … blocks, summed in block order (the same bits
+/// whatever the thread count that computed the block sums); returns the total, start[blocks].
+double blockStarts(const std::vector<double>& sum, std::size_t blocks, std::vector<double>& start)
+{
+  start[0] = 0.0;
+  for (std::size_t b = 0; b < blocks; ++b)
+  {
+    start[b + 1] = start[b] + sum[b];
+  }
+  return start[blocks];
+}
+
 constexpr int kNormalTableBits = 16;
 constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
 constexpr int kBucket = 8;  // vacated cells are bucketed in squares of kBucket x kBucket cells
@@ -1248,12 +1260,7 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
         }
         block_sum_[b] = sum;
       });
-  block_start_[0] = 0.0;
-  for (std::size_t b = 0; b < row_blocks; ++b)
-  {
-    block_start_[b + 1] = block_start_[b] + block_sum_[b];
-  }
-  const double newborn_total = block_start_[row_blocks];
+  const double newborn_total = blockStarts(block_sum_, row_blocks, block_start_);
   const std::size_t capacity = birth_cell_.size();
   born = 0;
   if (newborn_total > 1e-9)
@@ -1382,12 +1389,7 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
                   }
                   block_sum_[b] = sum;
                 });
-  block_start_[0] = 0.0;
-  for (std::size_t b = 0; b < item_blocks; ++b)
-  {
-    block_start_[b + 1] = block_start_[b] + block_sum_[b];
-  }
-  const double total = block_start_[item_blocks];
+  const double total = blockStarts(block_sum_, item_blocks, block_start_);
   if (total <= 1e-12)
   {
     std::fill(p.weight.begin(), p.weight.end(), 0.0F);
