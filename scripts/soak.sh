@@ -11,6 +11,8 @@
 #   --scenario FILE  the drive (default: config/synthetic_drive_long.yaml)
 #   --rate R         rosbag play rate (default 1: real time)
 #   --keep           keep the drive and the bag (several GB for the default drive)
+#   --model CFG --weights FILE   run the network (OpenCV DNN) instead of replaying the labels,
+#                    e.g. models/yolo/yolov3-tiny.cfg and weights from `bench_yolo --write-weights`
 # Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames), DIR/replay.log.
 set -eo pipefail
 
@@ -20,13 +22,16 @@ out=$root/soak_output
 scenario=$root/config/synthetic_drive_long.yaml
 rate=1.0
 keep=false
+detector=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --output) out=$(realpath -m "$2"); shift ;;
     --scenario) scenario=$(realpath "$2"); shift ;;
     --rate) rate=$2; shift ;;
     --keep) keep=true ;;
-    -h | --help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --model) detector+=(model_cfg:="$(realpath "$2")"); shift ;;
+    --weights) detector+=(model_weights:="$(realpath "$2")"); shift ;;
+    -h | --help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "soak: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -50,7 +55,7 @@ port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.
 export ROS_MASTER_URI=http://localhost:$port
 echo "[soak] kitti_replay.launch at rate $rate (roslaunch on port $port, log in $out/replay.log)"
 roslaunch -p "$port" grid_vision_fusion kitti_replay.launch bag:="$out/drive.bag" rate:="$rate" \
-  replay_directory:="$drive/label_2" start_delay:=10 >"$out/replay.log" 2>&1 &
+  replay_directory:="$drive/label_2" start_delay:=10 "${detector[@]}" >"$out/replay.log" 2>&1 &
 launch=$!
 manager=""
 for _ in $(seq 60); do  # the manager's process, once roslaunch has started it
