@@ -98,6 +98,11 @@ sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter,
     count += (c == CellClass::kStatic || c == CellClass::kDynamic) ? 1 : 0;
   }
   modifier.resize(count);
+  msg->is_dense = true;
+  if (count == 0)
+  {
+    return msg;  // an iterator over no data would bind a reference to data.front() (UB)
+  }
   sensor_msgs::PointCloud2Iterator<float> it(*msg, "x");
   const auto z = static_cast<float>(filter.groundZ());
   const float blue = packRgb(0, 0, 255);
@@ -127,7 +132,6 @@ sensor_msgs::PointCloud2::Ptr gridCellsToCloud(const DynamicGridFilter& filter,
       ++it;
     }
   }
-  msg->is_dense = true;
   return msg;
 }
 
