@@ -76,11 +76,12 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
   object.median_y = median(ys);
   object.x = object.median_x;
   object.y = object.median_y;
-  const std::vector<std::uint32_t> voters =
-      config.motion_vote == MotionVote::kCluster
-          ? objectCluster(points, object.members, box, config.centre.cluster_distance)
-          : object.members;
-  for (std::uint32_t i : voters)
+  std::vector<std::uint32_t> cluster;
+  if (config.motion_vote == MotionVote::kCluster)
+  {
+    cluster = objectCluster(points, object.members, box, config.centre.cluster_distance);
+  }
+  for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? cluster : object.members)
   {
     if (points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic))
     {
