@@ -130,13 +130,14 @@ void Tracker::predict(Track& track, double dt) const
 void Tracker::correct(Track& track, const TrackObservation& observation) const
 {
   double rp = config_.position_sigma * config_.position_sigma;
-  // Huber: beyond robust_sigma the position counts with weight robust_sigma / d (its noise
-  // inflated by (d / robust_sigma)²), so that a jump of the centre estimate moves the track, and
+  // Beyond robust_sigma (Mahalanobis distance d) the position's noise is inflated by
+  // (d / robust_sigma)², so that a jump of the centre estimate moves the track, and
   // feeds its speed, less than a steady displacement does.
-  const double d = std::sqrt(positionDistance2(track, observation));
-  if (config_.robust_sigma > 0.0 && d > config_.robust_sigma)
+  if (config_.robust_sigma > 0.0)
   {
-    rp *= (d / config_.robust_sigma) * (d / config_.robust_sigma);
+    const double d2 = positionDistance2(track, observation);
+    const double k2 = config_.robust_sigma * config_.robust_sigma;
+    rp *= std::max(d2 / k2, 1.0);
   }
   if (observation.has_velocity)
   {

@@ -43,8 +43,8 @@ struct TrackerConfig
   double velocity_sigma = 1.0;       ///< noise of the grid's velocity of a dynamic region [m/s], > 0
   double initial_speed_sigma = 5.0;  ///< velocity uncertainty of a new track without one [m/s], > 0
   double max_gap = 1.0;  ///< more time between two images [s], or time going back, resets the tracks
-  /// Robust update (Huber): a position farther than robust_sigma (Mahalanobis, [σ]) from the
-  /// prediction counts with weight robust_sigma / distance, so that a jump of the centre estimate
+  /// Robust update: a position farther than robust_sigma (Mahalanobis, [σ]) from the
+  /// prediction has its noise inflated by (distance / robust_sigma)², so that a jump of the centre estimate
   /// (the visible part of an object changing) moves the track, and its speed, less than a
   /// steady displacement. 0: the plain Kalman update. >= 0.
   double robust_sigma = 0.0;
