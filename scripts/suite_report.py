@@ -33,7 +33,8 @@ BAND_TITLES = {"static": "static", "0.5-1": "moving 0.5-1 m/s", "1-3": "moving 1
 MOVING_TARGET_BANDS = ("1-3", ">3")  # truth speed >= 1 m/s
 HEADLINE_CLASSES = ("car", "van", "truck", "pedestrian", "cyclist")
 CSV_COLUMNS = ("frame", "label", "truth_motion", "predicted_motion", "truth_band", "truth_speed_mps",
-               "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad")
+               "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad", "truth_id",
+               "track_id")
 THRESHOLD_KEYS = {"min_moving_dynamic", "min_moving_dynamic_per_class", "min_static_static",
                   "min_class_matches"}
 

@@ -362,6 +362,8 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
       matched.truth_speed_mps = gt.has_state ? std::hypot(gt.vx, gt.vy) : 0.0;
       matched.band = speedBandOf(gt.motion, gt.has_state, matched.truth_speed_mps);
       matched.longitudinal_m = gt.longitudinal_m;
+      matched.truth_id = gt.track_id;
+      matched.track_id = det.track_id;
       matched.has_state = det.has_state && gt.has_state;
       matched.position_error_m = std::nan("");
       matched.speed_error_mps = std::nan("");

@@ -93,6 +93,12 @@ std::string csvNumber(double value, int decimals)
   return std::isfinite(value) ? number(value, decimals) : "";
 }
 
+/// An identity for a CSV field: empty when unknown (negative).
+std::string idField(std::int64_t id)
+{
+  return id < 0 ? "" : std::to_string(id);
+}
+
 std::string percent(double fraction)
 {
   return number(100.0 * fraction, 1);
@@ -299,14 +305,15 @@ std::string matchesCsv(const EvaluationResult& result)
   static const char* const kMotion[] = {"unknown", "static", "dynamic"};
   std::ostringstream out;
   out << "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
-         "position_error_m,speed_error_mps,heading_error_rad\n";
+         "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id\n";
   for (const MatchedObject& m : result.matched_objects)
   {
     out << m.frame << ',' << m.label << ',' << kMotion[static_cast<std::size_t>(m.truth_motion)] << ','
         << kMotion[static_cast<std::size_t>(m.predicted_motion)] << ',' << toString(m.band) << ','
         << number(m.truth_speed_mps, 3) << ',' << number(m.longitudinal_m, 2) << ','
         << csvNumber(m.position_error_m, 3) << ',' << csvNumber(m.speed_error_mps, 3) << ','
-        << csvNumber(m.heading_error_rad, 4) << '\n';
+        << csvNumber(m.heading_error_rad, 4) << ',' << idField(m.truth_id) << ',' << idField(m.track_id)
+        << '\n';
   }
   return out.str();
 }

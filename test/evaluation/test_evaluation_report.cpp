@@ -75,15 +75,17 @@ TEST(EvaluationReport, MatchesCsv)
   EvalObject gt = object("000003", "cyclist", Motion::kDynamic, kA, 1.F, 12.5);
   gt.has_state = true;
   gt.vx = 4.0;
+  gt.track_id = 7;
   EvalObject det = gt;
+  det.track_id = -1;  // a label file's detection: no identity, an empty field
   det.motion = Motion::kStatic;
   det.x = 1.0;
   det.vx = 0.0;
   const EvaluationResult result = evaluate({gt}, {det}, EvaluationConfig{});
   EXPECT_EQ(matchesCsv(result),
             "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
-            "position_error_m,speed_error_mps,heading_error_rad\n"
-            "000003,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,\n");
+            "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id\n"
+            "000003,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,,7,\n");
   EXPECT_EQ(matchesCsv(EvaluationResult{}).find('\n') + 1,
             matchesCsv(EvaluationResult{}).size());  // header only
 }

@@ -20,13 +20,13 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import suite_report  # noqa: E402
 
 HEADER = ("frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
-          "position_error_m,speed_error_mps,heading_error_rad\n")
+          "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id\n")
 DEVEL = None
 
 
 def row(label, truth, predicted, band, speed=0.0, position="1.000", speed_error="0.100", heading=""):
-    return "f,%s,%s,%s,%s,%.3f,10.00,%s,%s,%s\n" % (label, truth, predicted, band, speed, position, speed_error,
-                                                    heading)
+    return "f,%s,%s,%s,%s,%.3f,10.00,%s,%s,%s,3,4\n" % (label, truth, predicted, band, speed, position, speed_error,
+                                                        heading)
 
 
 class SuiteReportTest(unittest.TestCase):

@@ -113,6 +113,8 @@ struct MatchedObject
   double position_error_m = 0.0;
   double speed_error_mps = 0.0;
   double heading_error_rad = 0.0;  ///< NaN unless both are dynamic (as heading_error_rad below)
+  std::int64_t truth_id = -1;      ///< the ground truth's track_id (tracklet), −1 when unknown
+  std::int64_t track_id = -1;      ///< the detection's track_id (DetectedObject.id), −1 when unknown
 };
 
 /// Predicted-motion counts of a set of matched objects, indexed by Motion (unknown, static,
