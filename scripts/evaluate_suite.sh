@@ -13,10 +13,16 @@
 #   --workspace DIR       catkin workspace with the built package (default: $GVF_WORKSPACE or
 #                         ~/.cache/grid_vision_fusion/workspace; build it with scripts/build.sh)
 #   --devel DIR           its devel space, if not WORKSPACE/devel
-#   -j, --jobs N          scenarios run in parallel (default 2)
+#   -j, --jobs N          scenarios run in parallel (default 2); each run_pipeline gets
+#                         max(1, cores / N) grid threads unless --param dynamic_grid/threads=...
 #   --scenario-dir DIR    folder of scenario YAML files (default: config/scenarios)
 #   --config-dir DIR      the nodes' parameter files for run_pipeline (default: the package's
 #                         config/), to score a tuned configuration
+#   --param NODE/KEY=V    one parameter for run_pipeline on top of the files (its --param),
+#                         e.g. --param fusion/motion_vote=cluster; repeatable
+#   --reuse DIR           score again the drives and bags that an earlier --keep run left in
+#                         DIR/work/ (no make_synthetic_drive, no kitti_to_bag): a tuning loop in
+#                         a fraction of the time; DIR must not be the --output folder
 #   --thresholds FILE     JSON thresholds (e.g. config/scenarios/targets.json): exit 3 when one
 #                         is not met
 #   --junit FILE          also write the threshold checks as JUnit XML (for the test command)
@@ -38,6 +44,8 @@ only=""
 thresholds=""
 junit=""
 config_dir=""
+reuse=""
+params=()
 export PATH=/usr/bin:/bin:$PATH
 
 usage_error() {
@@ -54,7 +62,8 @@ while [[ $# -gt 0 ]]; do
       exit 0
       ;;
     --keep) keep=true ;;
-    --scenarios | --output | --workspace | --devel | -j | --jobs | --scenario-dir | --thresholds | --junit | --config-dir)
+    --scenarios | --output | --workspace | --devel | -j | --jobs | --scenario-dir | --thresholds | --junit | --config-dir | \
+      --param | --reuse)
       [[ $# -ge 2 ]] || usage_error "$1 needs a value"
       case "$1" in
         --scenarios) only=$2 ;;
@@ -66,6 +75,8 @@ while [[ $# -gt 0 ]]; do
         --thresholds) thresholds=$(absolute "$2") ;;
         --junit) junit=$(absolute "$2") ;;
         --config-dir) config_dir=$(absolute "$2") ;;
+        --param) params+=("$2") ;;
+        --reuse) reuse=$(absolute "$2") ;;
       esac
       shift
       ;;
@@ -78,8 +89,14 @@ done
 [[ -d "$scenario_dir" ]] || usage_error "no scenario folder $scenario_dir"
 [[ -z "$thresholds" || -f "$thresholds" ]] || usage_error "no thresholds file $thresholds"
 [[ -z "$config_dir" || -d "$config_dir" ]] || usage_error "no config folder $config_dir"
+[[ -z "$reuse" || -d "$reuse/work" ]] || usage_error "no kept drives in $reuse/work (run with --keep first)"
+[[ -z "$reuse" || "$reuse" != "$out" ]] || usage_error "--reuse needs another --output folder than $reuse"
 pipeline_options=()
 [[ -z "$config_dir" ]] || pipeline_options=(--config-dir "$config_dir")
+# Parallel scenarios share the cores: one grid thread per core and scenario (the grid's output
+# does not depend on its thread count), unless a --param sets it; later --param options win.
+pipeline_options+=(--param "dynamic_grid/threads=$(((jobs < $(nproc)) ? $(nproc) / jobs : 1))")
+for param in "${params[@]}"; do pipeline_options+=(--param "$param"); done
 
 # The scenarios: every *.yaml of the folder, sorted, or the --scenarios subset in its order.
 mapfile -t available < <(find "$scenario_dir" -maxdepth 1 -name '*.yaml' -printf '%f\n' | sed 's/\.yaml$//' | sort)
@@ -122,7 +139,9 @@ cpu="$(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2 | sed "s/^ *//" || true
 run_scenario() {
   local name=$1 file=$scenario_dir/$1.yaml
   local log=$out/logs/$name.log status=$out/logs/$name.status work=$out/work/$name
-  local drive=$work/kitti/2011_09_26/2011_09_26_drive_9001_sync start=$SECONDS from_drive
+  local source=${reuse:+$reuse/work/$1}
+  source=${source:-$work}
+  local drive=$source/kitti/2011_09_26/2011_09_26_drive_9001_sync start=$SECONDS from_drive
   mkdir -p "$work"
   : >"$log"
   step() {
@@ -140,12 +159,16 @@ run_scenario() {
     [[ "$from_drive" = /* ]] || from_drive=$root/$from_drive
     synth+=(--from-drive "$from_drive")
   fi
-  step make_synthetic_drive "$tools/make_synthetic_drive" "${synth[@]}" || return 1
-  step kitti_to_bag "$tools/kitti_to_bag" --quiet "$drive" "$work/drive.bag" || return 1
-  if [[ "$keep" != true ]]; then  # the pipeline reads the bag, evaluate the metadata
-    rm -rf "$drive/image_02/data" "$drive/velodyne_points/data"
+  if [[ -n "$reuse" ]]; then
+    [[ -f "$source/drive.bag" ]] || step "reuse: no $source/drive.bag" false || return 1
+  else
+    step make_synthetic_drive "$tools/make_synthetic_drive" "${synth[@]}" || return 1
+    step kitti_to_bag "$tools/kitti_to_bag" --quiet "$drive" "$work/drive.bag" || return 1
+    if [[ "$keep" != true ]]; then  # the pipeline reads the bag, evaluate the metadata
+      rm -rf "$drive/image_02/data" "$drive/velodyne_points/data"
+    fi
   fi
-  step run_pipeline "$tools/run_pipeline" --bag "$work/drive.bag" --output "$work/objects.bag" \
+  step run_pipeline "$tools/run_pipeline" --bag "$source/drive.bag" --output "$work/objects.bag" \
     --backend replay --replay-directory "$drive/label_2" "${pipeline_options[@]}" || return 1
   step evaluate "$tools/evaluate" --drive "$drive" --detections "$work/objects.bag" \
     --output "$out/scenarios/$name" || return 1

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -38,6 +39,9 @@ options:
   --detector-config FILE    overrides DIR/yolo_detector.yaml
   --projection-config FILE  overrides DIR/grid_projection.yaml
   --fusion-config FILE      overrides DIR/fusion.yaml
+  --param NODE/KEY=VALUE    sets one parameter on top of the files, as a launch file's <param>
+                            (NODE: dynamic_grid, yolo_detector, grid_projection or fusion;
+                            VALUE typed as YAML), e.g. --param dynamic_grid/threads=1; repeatable
   --backend NAME            opencv_dnn or replay (default: the detector config's backend)
   --model FILE              Darknet .cfg or .onnx (default: models/yolo/yolov3.cfg of the package)
   --weights FILE            Darknet .weights matching --model
@@ -63,6 +67,7 @@ struct Options
   std::string backend, model, weights, class_names;
   std::string replay_directory, replay_file_pattern = "%010d.txt", replay_frame_index = "seq";
   gvf::PipelineTopics topics;
+  std::vector<std::string> params;  ///< --param NODE/KEY=VALUE, in command-line order
   double max_tf_wait = 0.5;
   bool write_grids = false;
   bool write_detections = false;
@@ -109,6 +114,32 @@ double medianOf(std::vector<double> values)
   return gvf::median(values);
 }
 
+/// Applies one --param NODE/KEY=VALUE to the source of NODE.
+void applyParam(const std::string& param, const std::map<std::string, gvf::YamlParamSource*>& sources)
+{
+  const std::size_t slash = param.find('/');
+  const std::size_t eq = param.find('=');
+  if (slash == std::string::npos || eq == std::string::npos || slash > eq || slash + 1 == eq)
+  {
+    throw std::invalid_argument("--param: \"" + param + "\" is not NODE/KEY=VALUE");
+  }
+  const auto node = sources.find(param.substr(0, slash));
+  if (node == sources.end())
+  {
+    throw std::invalid_argument("--param: unknown node \"" + param.substr(0, slash) +
+                                "\" (dynamic_grid, yolo_detector, grid_projection or fusion)");
+  }
+  // The value is typed as in a YAML file (5 int, 5.0 double, true bool, text string).
+  const gvf::YamlParamSource value =
+      gvf::YamlParamSource::fromString("value: " + param.substr(eq + 1), "--param " + param);
+  XmlRpc::XmlRpcValue typed;
+  if (!value.get("value", typed))
+  {
+    throw std::invalid_argument("--param: \"" + param + "\" has no value");
+  }
+  node->second->set(param.substr(slash + 1, eq - slash - 1), typed);
+}
+
 std::string packagePath(const std::string& what)
 {
   const std::string package = ros::package::getPath("grid_vision_fusion");
@@ -151,6 +182,14 @@ int run(const Options& o)
   detector.set("replay/directory", o.replay_directory);
   detector.set("replay/file_pattern", o.replay_file_pattern);
   detector.set("replay/frame_index", o.replay_frame_index);
+  const std::map<std::string, gvf::YamlParamSource*> sources = {{"dynamic_grid", &grid},
+                                                                {"yolo_detector", &detector},
+                                                                {"grid_projection", &projection},
+                                                                {"fusion", &fusion}};
+  for (const std::string& param : o.params)
+  {
+    applyParam(param, sources);
+  }
 
   std::vector<std::string> unknown;
   gvf::PipelineConfig config = gvf::pipelineConfigFromParams(grid, detector, projection, fusion, &unknown);
@@ -313,6 +352,8 @@ int main(int argc, char** argv)
         o.projection_config = value;
       else if (arg == "--fusion-config")
         o.fusion_config = value;
+      else if (arg == "--param")
+        o.params.push_back(value);
       else if (arg == "--backend")
         o.backend = value;
       else if (arg == "--model")

@@ -147,6 +147,18 @@ TEST_F(ToolErrors, RunPipelineNamesAnUnwritableOutput)
   EXPECT_FALSE(fs::exists(output.parent_path()));
 }
 
+TEST_F(ToolErrors, RunPipelineNamesABadParam)
+{
+  const fs::path output = work_ / "param_out.bag";
+  writeFile(output, kPrecious);
+  const std::string start = std::string(RUN_PIPELINE) + " --bag " + full_bag_.string() + " --output " +
+                            output.string() + replayArgs(drive_);
+  expectCleanFailure(run(start + " --param nowhere/threads=1"), "unknown node \"nowhere\"", output);
+  expectCleanFailure(run(start + " --param threads=1"), "\"threads=1\" is not NODE/KEY=VALUE", output);
+  // A value of the wrong type is refused by the node's table, which names the parameter.
+  expectCleanFailure(run(start + " --param dynamic_grid/threads=many"), "threads", output);
+}
+
 TEST_F(ToolErrors, KittiToBagNamesAMissingDrive)
 {
   const fs::path output = work_ / "out.bag";
