@@ -205,6 +205,38 @@ double Tracker::windowSpeed(const Track& track) const
   return (newest.tail<2>() - oldest.tail<2>()).norm() / span;
 }
 
+double Tracker::sustainedSpeed(const Track& track) const
+{
+  if (windowSpeed(track) <= 0.0)
+  {
+    return 0.0;  // too short a history
+  }
+  const Eigen::Vector3d& oldest = track.history.front();
+  const Eigen::Vector3d& newest = track.history.back();
+  const double middle_stamp = 0.5 * (oldest(0) + newest(0));
+  const Eigen::Vector3d* middle = &oldest;
+  for (const Eigen::Vector3d& entry : track.history)
+  {
+    if (std::abs(entry(0) - middle_stamp) < std::abs((*middle)(0) - middle_stamp))
+    {
+      middle = &entry;
+    }
+  }
+  const double first_span = (*middle)(0) - oldest(0);
+  const double second_span = newest(0) - (*middle)(0);
+  if (first_span <= 0.0 || second_span <= 0.0)
+  {
+    return 0.0;
+  }
+  const Eigen::Vector2d first = middle->tail<2>() - oldest.tail<2>();
+  const Eigen::Vector2d second = newest.tail<2>() - middle->tail<2>();
+  if (first.dot(second) <= 0.0)
+  {
+    return 0.0;  // back and forth: no displacement that holds
+  }
+  return std::min(first.norm() / first_span, second.norm() / second_span);
+}
+
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
   track.history.emplace_back(stamp_s, track.state(0), track.state(1));
@@ -225,7 +257,7 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
   {
     const double filter_speed = track.state.tail<2>().norm();
     const double window_speed = windowSpeed(track);
-    if (std::min(filter_speed, window_speed) > config_.motion_speed_threshold)
+    if (std::min(filter_speed, sustainedSpeed(track)) > config_.motion_speed_threshold)
     {
       evidence += config_.speed_evidence;
     }
@@ -255,7 +287,10 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
   }
   const bool dwelling =
       track.has_motion_change && stamp_s - track.last_motion_change < config_.motion_min_dwell - 1e-9;
-  if (verdict != track.motion && verdict != Motion::kUnknown && !dwelling)
+  // Evidence at the opposite limit ends the dwell: a verdict taken on thin evidence (an object
+  // first seen far away) does not outlast a score that has swung all the way against it.
+  const bool saturated = std::abs(track.motion_score) >= config_.motion_evidence_limit - 1e-9;
+  if (verdict != track.motion && verdict != Motion::kUnknown && (!dwelling || saturated))
   {
     track.has_motion_change = true;
     track.last_motion_change = stamp_s;

@@ -212,42 +212,50 @@ TEST(Tracker, SpeedEvidenceFindsAMoverTheGridCallsStatic)
   }
 }
 
-TEST(Tracker, TheVerdictDwellsAfterAChange)
+TEST(Tracker, TheVerdictDwellsAfterAChangeUnlessTheEvidenceSaturates)
 {
-  // Parked for 3 s, dynamic regions for 0.6 s (the verdict turns dynamic), then static regions
-  // again: the verdict stays dynamic until 2 s after its change, then turns static.
-  TrackerConfig config;
-  config.speed_evidence = 0.0;  // the grid's evidence alone, for a hand count
-  Tracker tracker(config);
-  int k = 0;
-  for (; k < 30; ++k)
+  // Parked for 3 s, dynamic regions for 0.6 s (the score climbs from -3 to +3, the verdict turns
+  // dynamic at +1.5), then static regions again. Returns when the verdict turned static.
+  auto staticAgainAt = [](std::uint32_t static_points, std::uint32_t dynamic_points, double& changed_at)
   {
-    tracker.update(k * kFramePeriodS, {observe("car", 12.0, 3.0, 400.F)});
-  }
-  double changed_at = -1.0;
-  for (; k < 36; ++k)
-  {
-    if (tracker.update(k * kFramePeriodS, {observe("car", 12.0, 3.0, 400.F, Motion::kDynamic)})[0].motion ==
-            Motion::kDynamic &&
-        changed_at < 0.0)
+    TrackerConfig config;
+    config.speed_evidence = 0.0;  // the grid's evidence alone, for a hand count
+    Tracker tracker(config);
+    int k = 0;
+    for (; k < 30; ++k)
     {
-      changed_at = k * kFramePeriodS;
+      tracker.update(k * kFramePeriodS, {observe("car", 12.0, 3.0, 400.F)});
     }
-  }
-  ASSERT_GT(changed_at, 0.0);
-  for (; k < 70; ++k)
-  {
-    const double t = k * kFramePeriodS;
-    const Motion m = tracker.update(t, {observe("car", 12.0, 3.0, 400.F)})[0].motion;
-    if (t < changed_at + 2.0 - 1e-6)
+    changed_at = -1.0;
+    for (; k < 36; ++k)
     {
-      EXPECT_EQ(m, Motion::kDynamic) << "t = " << t;
+      if (tracker.update(k * kFramePeriodS, {observe("car", 12.0, 3.0, 400.F, Motion::kDynamic)})[0].motion ==
+              Motion::kDynamic &&
+          changed_at < 0.0)
+      {
+        changed_at = k * kFramePeriodS;
+      }
     }
-    else
+    for (; k < 80; ++k)
     {
-      EXPECT_EQ(m, Motion::kStatic) << "t = " << t;
+      TrackObservation o = observe("car", 12.0, 3.0, 400.F);
+      o.static_points = static_points;
+      o.dynamic_points = dynamic_points;
+      if (tracker.update(k * kFramePeriodS, {o})[0].motion == Motion::kStatic)
+      {
+        return k * kFramePeriodS;
+      }
     }
-  }
+    return -1.0;
+  };
+  double changed_at = 0.0;
+  // Evidence -0.25 per image: the score passes -1.5 at t = 5.3 s, 1.9 s after the change
+  // (3.4 s), but the verdict dwells until 2 s after it.
+  EXPECT_NEAR(staticAgainAt(5, 3, changed_at), 5.4, 1e-6);
+  EXPECT_NEAR(changed_at, 3.4, 1e-6);
+  // Evidence -1 per image: the score reaches -3, the opposite limit, at 4.1 s, which ends the
+  // dwell (a verdict on thin evidence does not outlast evidence swung all the way against it).
+  EXPECT_NEAR(staticAgainAt(10, 0, changed_at), 4.1, 1e-6);
 }
 
 TEST(Tracker, AYoungTrackFollowsItsRegionsWithoutFlicker)

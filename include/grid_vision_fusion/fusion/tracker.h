@@ -57,13 +57,19 @@ struct TrackerConfig
   double motion_evidence_limit = 3.0;   ///< > 0
   double motion_switch_evidence = 1.5;  ///< in (0, motion_evidence_limit]
   /// After a change (of either kind), the verdict holds for at least this long [s], >= 0: no
-  /// flicker faster.
+  /// flicker faster — unless the score reaches the opposite limit (±motion_evidence_limit), so
+  /// that a verdict taken on thin evidence (an object first seen far away) does not outlast
+  /// evidence that has swung all the way against it.
   double motion_min_dwell = 2.0;
   /// Weight of the track's own motion as evidence, >= 0 (0: the grid's evidence only): +weight
-  /// when both the filter's speed and the average speed of the last motion_speed_window (the
-  /// filtered position's displacement over that time) exceed motion_speed_threshold, −weight
-  /// when both are below half of it. Needs a track older than half the window.
-  double speed_evidence = 1.0;
+  /// when both the filter's speed and the sustained speed (the smaller of the average speeds of
+  /// the filtered position over the two halves of the last motion_speed_window, 0 when their
+  /// directions differ by more than 90°: a jump of the centre estimate falls into one half only)
+  /// exceed motion_speed_threshold, −weight when both the filter's speed and the average speed
+  /// over the window are below half of it. Needs a track older than half the window. Above 1 it
+  /// outweighs a region vote that leans static: the grid does not resolve motion slower than
+  /// about a cell per scan, whose cells stay occupied and turn static.
+  double speed_evidence = 1.5;
   double motion_speed_threshold = 1.0;  ///< [m/s], > 0
   double motion_speed_window = 1.0;     ///< [s], > 0
 
@@ -159,6 +165,10 @@ private:
   double speedSigma(const Track& track) const;
   /// Average speed over the track's history (0 while it spans less than half the window).
   double windowSpeed(const Track& track) const;
+  /// The smaller of the average speeds over the two halves of the history, 0 when they point
+  /// more than 90° apart or the history is too short: a steady displacement passes, a single
+  /// jump of the centre estimate (which falls into one half) does not.
+  double sustainedSpeed(const Track& track) const;
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
 
   TrackerConfig config_;
