@@ -211,8 +211,24 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
           ++out.points_behind;
           continue;
         }
-        const double pu = hu / hw;
-        const double pv = hv / hw;
+        double pu = hu / hw;
+        double pv = hv / hw;
+        double depth = hw;
+        if (k == 0 && config.near_cells_at_bottom && pv >= height)
+        {
+          // The column's point on the bottom row v_b: (hv0 + a dz) / (hw0 + c dz) = v_b.
+          const double v_bottom = height - 0.5;
+          const double a = m(1, 2);
+          const double c = m(2, 2);
+          const double denominator = a - v_bottom * c;
+          const double lift = denominator != 0.0 ? (v_bottom * hw0 - hv0) / denominator : -1.0;
+          if (lift >= 0.0 && lift <= config.column_height && hw0 + c * lift >= config.min_depth)
+          {
+            depth = hw0 + c * lift;
+            pu = (hu0 + m(0, 2) * lift) / depth;
+            pv = v_bottom;
+          }
+        }
         if (!(pu >= 0.0 && pv >= 0.0 && pu < width && pv < height))
         {
           ++out.points_outside;
@@ -220,7 +236,7 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
         }
         out.u.push_back(static_cast<float>(pu));
         out.v.push_back(static_cast<float>(pv));
-        out.depth.push_back(static_cast<float>(hw));
+        out.depth.push_back(static_cast<float>(depth));
         out.x.push_back(static_cast<float>(x));
         out.y.push_back(static_cast<float>(y));
         out.vx.push_back(cvx);

@@ -222,6 +222,39 @@ TEST(GridProjection, DropsCellsBehindTooNearOrOutsideTheImage)
   }
 }
 
+TEST(GridProjection, NearCellsProjectWhereTheirColumnCrossesTheBottomRow)
+{
+  const KittiSetup kitti;
+  TestGrid grid = veloGrid();
+  grid.set(4.1, 0.1, 0.9F, 0.F);  // 4 m ahead: the road there lies below the image
+  grid.set(1.1, 0.1, 0.9F, 0.F);  // 1 m ahead: even 1 m above the road is below the image
+  GridProjectionConfig config;
+  config.column_height = 1.0;  // the 4 m column crosses the bottom row about 0.6 m up
+  ProjectedCells cells = projectGrid(grid.view(), kitti.camera, kitti.geometry, config);
+  EXPECT_EQ(cells.points_outside, 1U);
+  ASSERT_EQ(cells.size(), 1U);
+  EXPECT_FLOAT_EQ(cells.v[0], kitti.camera.height() - 0.5F);
+  EXPECT_NEAR(cells.x[0], 4.1, 1e-5);
+  // The pixel is the image of the column point at that row: find its height by bisection.
+  double low = -1.73, high = -1.73 + config.column_height;
+  for (int i = 0; i < 60; ++i)
+  {
+    const double mid = 0.5 * (low + high);
+    (kitti.pixelOf(Eigen::Vector3d(4.1, 0.1, mid)).y() > cells.v[0] ? low : high) = mid;
+  }
+  Eigen::Vector2d pixel;
+  double depth = 0.0;
+  ASSERT_TRUE(
+      kitti.camera.project(kitti.geometry.camera_from_grid * Eigen::Vector3d(4.1, 0.1, low), pixel, depth));
+  EXPECT_NEAR(cells.u[0], pixel.x(), 1e-2);
+  EXPECT_NEAR(cells.depth[0], depth, 1e-3);
+
+  config.near_cells_at_bottom = false;  // the paper's ground points only: both dropped
+  cells = projectGrid(grid.view(), kitti.camera, kitti.geometry, config);
+  EXPECT_EQ(cells.size(), 0U);
+  EXPECT_EQ(cells.points_outside, 2U);
+}
+
 TEST(GridProjection, TimeAlignmentMovesDynamicCellsWithTheirVelocity)
 {
   const KittiSetup kitti;

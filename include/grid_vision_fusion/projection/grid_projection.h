@@ -96,6 +96,12 @@ struct GridProjectionConfig
   double column_height = 1.5;
   /// Points per column, evenly spaced from the ground point to the top (both included). >= 2.
   int column_points = 2;
+  /// A cell whose ground point lies below the image (nearer than the camera sees the road, about
+  /// 6 m for KITTI's colour cameras) projects at the lowest point of its column, up to
+  /// column_height, that the image shows — on its bottom row —, so the near part of a close
+  /// object stays in the fusion band of its box, which the image's edge cuts. Off: such cells
+  /// are dropped (the paper's ground points only). Applies to the ground point of every mode.
+  bool near_cells_at_bottom = true;
   /// Predict the position of DYNAMIC cells to the image stamp with their velocity:
   /// (x, y) += (vx, vy)·(t_image − t_grid). STATIC cells do not move.
   bool predict_to_image_stamp = true;

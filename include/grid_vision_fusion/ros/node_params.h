@@ -201,6 +201,7 @@ void visitParams(GridProjectionParams& p, Visitor& v)
   v("column_mode", p.projection.column_mode);
   v("column_height", p.projection.column_height);
   v("column_points", p.projection.column_points);
+  v("near_cells_at_bottom", p.projection.near_cells_at_bottom);
   v("predict_to_image_stamp", p.projection.predict_to_image_stamp);
 }
 
