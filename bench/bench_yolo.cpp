@@ -8,10 +8,16 @@
 //      devel/lib/grid_vision_fusion/bench_yolo --write-weights DIR   (writes yolov3-tiny.weights
 //      and yolov3.weights with these random values into DIR and exits: for run_pipeline
 //      --benchmark with a real network architecture)
+//      devel/lib/grid_vision_fusion/bench_yolo --profile [yolov3-416|yolov3-tiny-416|yolov3-608]
+//      (per layer type: time from cv::dnn::Net::getPerfProfile, FLOPs, achieved GFLOP/s and the
+//      share of the frame; convolutions also by kernel size: where the time beyond the FLOP
+//      bound goes)
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/dnn.hpp>
+#include <opencv2/dnn/all_layers.hpp>
 
 #include <cstdint>
 #include <cstdio>
@@ -19,6 +25,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -123,10 +130,140 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
   state.counters["FLOP_bound_ms"] = flops / (peak.peakGflops() * 1e9) * 1e3;
 }
 
+/// Time and FLOPs of one group of layers over the profiled frames.
+struct LayerGroup
+{
+  int layers = 0;
+  double ms = 0.0;     ///< per frame
+  double flops = 0.0;  ///< per frame
+};
+
+/// --profile: the forward pass of `model` layer by layer (cv::dnn::Net::getPerfProfile, the
+/// OpenCV backend on the CPU with the detector's thread count), grouped by layer type and, for
+/// the convolutions, by kernel size and stride. Prints the tables; returns the process status.
+int profileModel(const Model& model, const std::string& weights, const MachineInfo& peak, int frames)
+{
+  cv::dnn::Net net = cv::dnn::readNetFromDarknet(kCfgDir + "/" + model.cfg, weights);
+  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  cv::Mat image(model.input, model.input, CV_8UC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
+  const cv::Mat blob =
+      cv::dnn::blobFromImage(image, 1.0 / 255.0, cv::Size(), cv::Scalar(), true, false, CV_32F);
+  net.setInput(blob);
+  std::vector<cv::Mat> outputs;
+  net.forward(outputs, net.getUnconnectedOutLayersNames());  // warm-up: allocations, layer fusion
+  const cv::dnn::MatShape shape{1, 3, model.input, model.input};
+  const std::vector<std::string> names = net.getLayerNames();
+  std::vector<double> layer_ms(names.size(), 0.0);
+  double total_ms = 0.0;
+  for (int f = 0; f < frames; ++f)
+  {
+    net.setInput(blob);
+    net.forward(outputs, net.getUnconnectedOutLayersNames());
+    std::vector<double> timings;
+    total_ms += static_cast<double>(net.getPerfProfile(timings)) * 1e3 / cv::getTickFrequency();
+    for (std::size_t i = 0; i < timings.size() && i < layer_ms.size(); ++i)
+    {
+      layer_ms[i] += timings[i] * 1e3 / cv::getTickFrequency();
+    }
+  }
+  std::map<std::string, LayerGroup> by_type, by_kernel;
+  double total_flops = 0.0;
+  for (std::size_t i = 0; i < names.size(); ++i)
+  {
+    const int id = net.getLayerId(names[i]);
+    const cv::Ptr<cv::dnn::Layer> layer = net.getLayer(id);
+    const double ms = layer_ms[i] / frames;
+    const double flops = static_cast<double>(net.getFLOPS(id, shape));
+    total_flops += flops;
+    LayerGroup& type = by_type[layer->type];
+    ++type.layers;
+    type.ms += ms;
+    type.flops += flops;
+    if (layer->type == "Convolution" && !layer->blobs.empty() && layer->blobs[0].dims == 4)
+    {
+      const auto* conv = dynamic_cast<const cv::dnn::ConvolutionLayer*>(layer.get());
+      const cv::MatSize kernel = layer->blobs[0].size;
+      std::string key = std::to_string(kernel[2]) + "x" + std::to_string(kernel[3]);
+      if (conv != nullptr && (conv->strides.empty() ? 1 : conv->strides[0]) > 1)
+      {
+        key += " stride " + std::to_string(conv->strides[0]);
+      }
+      LayerGroup& group = by_kernel[key];
+      ++group.layers;
+      group.ms += ms;
+      group.flops += flops;
+    }
+  }
+  total_ms /= frames;
+  const double bound_ms = total_flops / (peak.peakGflops() * 1e9) * 1e3;
+  std::printf(
+      "%s: %d frames, %.1f ms per frame (forward pass, getPerfProfile), %.2f GFLOP, FLOP bound %.1f ms "
+      "at %.1f GFLOP/s peak: %.2f x the bound\n",
+      model.name.c_str(), frames, total_ms, total_flops / 1e9, bound_ms, peak.peakGflops(),
+      total_ms / bound_ms);
+  auto print = [&](const char* title, const std::map<std::string, LayerGroup>& groups)
+  {
+    std::printf(
+        "\n| %s | layers | ms / frame | share | GFLOP | achieved GFLOP/s | %% of peak | ms beyond its bound "
+        "|\n"
+        "|---|---|---|---|---|---|---|---|\n",
+        title);
+    for (const auto& [name, g] : groups)
+    {
+      const double rate = g.ms > 0.0 ? g.flops / (g.ms * 1e6) : 0.0;
+      std::printf("| %s | %d | %.1f | %.1f %% | %.2f | %.1f | %.0f %% | %.1f |\n", name.c_str(), g.layers,
+                  g.ms, 100.0 * g.ms / total_ms, g.flops / 1e9, rate, 100.0 * rate / peak.peakGflops(),
+                  g.ms - g.flops / (peak.peakGflops() * 1e6));
+    }
+  };
+  print("layer type", by_type);
+  print("convolution kernel", by_kernel);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
+  if ((argc == 2 || argc == 3) && std::string(argv[1]) == "--profile")
+  {
+    const std::string name = argc == 3 ? argv[2] : "yolov3-416";
+    const std::map<std::string, Model> known{
+        {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},
+        {"yolov3-416", {"yolov3-416", "yolov3.cfg", 416, 5}},
+        {"yolov3-608", {"yolov3-608", "yolov3.cfg", 608, 3}}};
+    const auto model = known.find(name);
+    if (model == known.end())
+    {
+      std::fprintf(stderr, "bench_yolo: --profile takes yolov3-tiny-416, yolov3-416 or yolov3-608, not %s\n",
+                   name.c_str());
+      return 2;
+    }
+    const MachineInfo machine = machineInfo();
+    cv::setNumThreads(machine.cores);
+    std::printf("machine: %s\nopencv: %s, %d threads\n", machine.describe().c_str(),
+                cv::getVersionString().c_str(), cv::getNumThreads());
+    char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
+    if (mkdtemp(pattern) == nullptr)
+    {
+      std::fprintf(stderr, "bench_yolo: cannot create a temporary directory\n");
+      return 1;
+    }
+    int status = 1;
+    try
+    {
+      status = profileModel(model->second, writeRandomWeights(kCfgDir + "/" + model->second.cfg, pattern),
+                            machine, model->second.iterations);
+    }
+    catch (const std::exception& e)
+    {
+      std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+    }
+    std::filesystem::remove_all(pattern);
+    return status;
+  }
   if (argc == 3 && std::string(argv[1]) == "--write-weights")
   {
     try
