@@ -207,6 +207,22 @@ class EvaluateSuiteScriptTest(unittest.TestCase):
                 self.assertIn("missing key 'ego'", f.read())
             self.assertEqual(sorted(os.listdir(out)), ["logs"])  # no report, no partial outputs
 
+    def test_reuse_needs_kept_drives_and_another_output(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            result = self.run_suite("--reuse", tmp, "--output", os.path.join(tmp, "out"))
+            self.assertEqual(result.returncode, 2)
+            self.assertIn("no kept drives in %s/work (run with --keep first)" % tmp, result.stderr)
+            os.makedirs(os.path.join(tmp, "work"))
+            result = self.run_suite("--reuse", tmp, "--output", tmp)
+            self.assertEqual(result.returncode, 2)
+            self.assertIn("--reuse needs another --output folder than " + tmp, result.stderr)
+            # A scenario the kept run did not keep: its step fails, naming the missing bag.
+            out = os.path.join(tmp, "out")
+            result = self.run_suite("--reuse", tmp, "--output", out, "--scenarios", "pedestrians_crossing")
+            self.assertEqual(result.returncode, 1)
+            self.assertIn("scenario pedestrians_crossing: reuse: no %s/work/pedestrians_crossing/drive.bag failed"
+                          % tmp, result.stderr)
+
 
 def write_junit(path, result, tests):
     failed = {test.id(): message for test, message in result.failures + result.errors}
