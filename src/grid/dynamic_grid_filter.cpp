@@ -712,11 +712,14 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
             const float hole = 1.0F - total;
             if (config_.vacated_to_dynamic)
             {
-              const float m2 =
-                  velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
               const float occupied = s + cells_.p_dynamic[c];
               const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
-              d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+              if (lambda > 0.0F && moving_share > 0.0F)  // else 0: no exp for most cells
+              {
+                const float m2 =
+                    velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
+                d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+              }
               d_newborn += d_vacated;
               u_pred += (1.0F - lambda) * hole;
               left_vx_[c] = cells_.vx[c];
@@ -745,12 +748,13 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           cells_.p_unknown[c] = lu * inv_z;
           persistent_factor_[c] = po * inv_z;
           newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
-          // the sums of step 7 start from zero
-          stat_w_[c] = 0.0F;
-          stat_vx_[c] = 0.0F;
-          stat_vy_[c] = 0.0F;
-          stat_vxx_[c] = 0.0F;
-          stat_vyy_[c] = 0.0F;
+        }
+        // the sums of step 7 start from zero
+        const auto begin = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_begin) * gw);
+        const auto end = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_end) * gw);
+        for (std::vector<float>* v : {&stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
+        {
+          std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
       });
 
