@@ -7,7 +7,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <fstream>
+#include <mutex>
+#include <thread>
 
 #include "grid_vision_fusion/offline/bag_errors.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
@@ -409,6 +414,118 @@ BagRunSummary runPipelineOnBag(Pipeline& pipeline, const std::string& input_bag,
 
 namespace
 {
+/// One message of the input bag, deserialized by the reader thread.
+struct BagMessage
+{
+  std::string topic;
+  std::string datatype;
+  ros::Time time;
+  tf2_msgs::TFMessage::ConstPtr tf;
+  sensor_msgs::PointCloud2::ConstPtr cloud;
+  sensor_msgs::Image::ConstPtr image;
+  sensor_msgs::CameraInfo::ConstPtr info;
+};
+
+/// Reads and deserializes the bag's messages on its own thread, a few ahead of the pipeline, so
+/// that reading overlaps the stages (the grid does not keep both cores busy all the time). The
+/// messages come out in bag order; an exception of the reader (a truncated bag) is rethrown by
+/// next().
+class BagReader
+{
+public:
+  BagReader(rosbag::View& view, const PipelineTopics& topics)
+      : thread_([this, &view, &topics] { read(view, topics); })
+  {
+  }
+  ~BagReader()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+  }
+  BagReader(const BagReader&) = delete;
+  BagReader& operator=(const BagReader&) = delete;
+
+  /// The next message; false at the end of the bag. @throws what the reader threw.
+  bool next(BagMessage& message)
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !queue_.empty() || done_; });
+    if (queue_.empty())
+    {
+      if (error_)
+      {
+        std::rethrow_exception(error_);
+      }
+      return false;
+    }
+    message = std::move(queue_.front());
+    queue_.pop_front();
+    changed_.notify_all();
+    return true;
+  }
+
+private:
+  static constexpr std::size_t kAhead = 8;  ///< messages read ahead (about two frames)
+
+  void read(rosbag::View& view, const PipelineTopics& topics)
+  {
+    try
+    {
+      for (const rosbag::MessageInstance& m : view)
+      {
+        BagMessage message;
+        message.topic = m.getTopic();
+        message.datatype = m.getDataType();
+        message.time = m.getTime();
+        if (message.topic == topics.tf || message.topic == topics.tf_static)
+        {
+          message.tf = m.instantiate<tf2_msgs::TFMessage>();
+        }
+        else if (message.topic == topics.points)
+        {
+          message.cloud = m.instantiate<sensor_msgs::PointCloud2>();
+        }
+        else if (message.topic == topics.image)
+        {
+          message.image = m.instantiate<sensor_msgs::Image>();
+        }
+        else if (message.topic == topics.camera_info)
+        {
+          message.info = m.instantiate<sensor_msgs::CameraInfo>();
+        }
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [this] { return queue_.size() < kAhead || stop_; });
+        if (stop_)
+        {
+          break;
+        }
+        queue_.push_back(std::move(message));
+        changed_.notify_all();
+      }
+    }
+    catch (...)
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    changed_.notify_all();
+  }
+
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<BagMessage> queue_;
+  bool stop_ = false;
+  bool done_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;  ///< last: started once the members above exist
+};
+
 BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& input_bag,
                                         const PipelineTopics& topics,
                                         const std::function<void(std::size_t, std::size_t)>& progress)
@@ -427,59 +544,57 @@ BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& i
                              topics.tf_static);
   }
   ros::Time first, last;
-  for (const rosbag::MessageInstance& m : view)
+  BagReader reader(view, topics);
+  BagMessage m;
+  while (reader.next(m))
   {
-    const std::string& topic = m.getTopic();
+    const std::string& topic = m.topic;
     bool known_type = true;
     if (topic == topics.tf || topic == topics.tf_static)
     {
-      const auto msg = m.instantiate<tf2_msgs::TFMessage>();
-      known_type = static_cast<bool>(msg);
-      if (msg)
+      known_type = static_cast<bool>(m.tf);
+      if (m.tf)
       {
-        pipeline.addTf(*msg, topic == topics.tf_static);
+        pipeline.addTf(*m.tf, topic == topics.tf_static);
       }
     }
     else if (topic == topics.points)
     {
-      const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
-      known_type = static_cast<bool>(msg);
-      if (msg)
+      known_type = static_cast<bool>(m.cloud);
+      if (m.cloud)
       {
-        pipeline.addCloud(msg);
+        pipeline.addCloud(m.cloud);
       }
     }
     else if (topic == topics.image)
     {
-      const auto msg = m.instantiate<sensor_msgs::Image>();
-      known_type = static_cast<bool>(msg);
-      if (msg)
+      known_type = static_cast<bool>(m.image);
+      if (m.image)
       {
-        pipeline.addImage(msg);
+        pipeline.addImage(m.image);
         ++summary.frames;
       }
     }
     else if (topic == topics.camera_info)
     {
-      const auto msg = m.instantiate<sensor_msgs::CameraInfo>();
-      known_type = static_cast<bool>(msg);
-      if (msg)
+      known_type = static_cast<bool>(m.info);
+      if (m.info)
       {
-        pipeline.addCameraInfo(msg);
+        pipeline.addCameraInfo(m.info);
       }
     }
     if (!known_type)
     {
-      throw std::runtime_error("topic " + topic + " of " + input_bag + " holds " + m.getDataType() +
+      throw std::runtime_error("topic " + topic + " of " + input_bag + " holds " + m.datatype +
                                " messages, not the type run_pipeline expects there");
     }
     if (summary.messages_read == 0)
     {
-      first = m.getTime();
+      first = m.time;
     }
-    last = m.getTime();
+    last = m.time;
     ++summary.messages_read;
-    pipeline.advanceTo(m.getTime());
+    pipeline.advanceTo(m.time);
     if (topic == topics.image)
     {
       summary.rss_mb.push_back(residentMemoryMiB());
