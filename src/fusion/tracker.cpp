@@ -189,27 +189,28 @@ double Tracker::speedSigma(const Track& track) const
   return std::sqrt(std::max(0.0, v.dot(p * v)) / (speed * speed));
 }
 
+bool Tracker::windowFilled(const Track& track) const
+{
+  return track.history.size() >= 2 &&
+         track.history.back()(0) - track.history.front()(0) >= 0.5 * config_.motion_speed_window;
+}
+
 double Tracker::windowSpeed(const Track& track) const
 {
-  if (track.history.size() < 2)
+  if (!windowFilled(track))
   {
     return 0.0;
   }
   const Eigen::Vector3d& oldest = track.history.front();
   const Eigen::Vector3d& newest = track.history.back();
-  const double span = newest(0) - oldest(0);
-  if (span < 0.5 * config_.motion_speed_window)
-  {
-    return 0.0;
-  }
-  return (newest.tail<2>() - oldest.tail<2>()).norm() / span;
+  return (newest.tail<2>() - oldest.tail<2>()).norm() / (newest(0) - oldest(0));
 }
 
 double Tracker::sustainedSpeed(const Track& track) const
 {
-  if (windowSpeed(track) <= 0.0)
+  if (!windowFilled(track))
   {
-    return 0.0;  // too short a history
+    return 0.0;
   }
   const Eigen::Vector3d& oldest = track.history.front();
   const Eigen::Vector3d& newest = track.history.back();
@@ -250,10 +251,7 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
   {
     evidence = (static_cast<double>(observation.dynamic_points) - observation.static_points) / total;
   }
-  const bool window_filled =
-      track.history.size() >= 2 &&
-      track.history.back()(0) - track.history.front()(0) >= 0.5 * config_.motion_speed_window;
-  if (config_.speed_evidence > 0.0 && window_filled)
+  if (config_.speed_evidence > 0.0 && windowFilled(track))
   {
     const double filter_speed = track.state.tail<2>().norm();
     const double window_speed = windowSpeed(track);

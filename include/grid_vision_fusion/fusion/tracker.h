@@ -163,6 +163,8 @@ private:
   void restart(Track& track, const TrackObservation& observation) const;
   void updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const;
   double speedSigma(const Track& track) const;
+  /// The track's history spans at least half of motion_speed_window: its speeds count.
+  bool windowFilled(const Track& track) const;
   /// Average speed over the track's history (0 while it spans less than half the window).
   double windowSpeed(const Track& track) const;
   /// The smaller of the average speeds over the two halves of the history, 0 when they point
