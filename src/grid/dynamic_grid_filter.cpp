@@ -749,7 +749,9 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           persistent_factor_[c] = po * inv_z;
           newborn_[c] = po > 0.5F ? ldn * inv_z : 0.0F;
         }
-        // the sums of step 7 start from zero
+        // The sums of step 7 start from zero. Zeroed here, per block after its cells: zeroing them
+        // with the three arrays before the prediction measured 8.2 instead of 7.0 ms per cycle on
+        // 2 threads (bench_dynamic_grid).
         const auto begin = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_begin) * gw);
         const auto end = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_end) * gw);
         for (std::vector<float>* v : {&stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
