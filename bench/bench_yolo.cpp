@@ -4,11 +4,16 @@
 // depend on training). Reports ms per frame, achieved GFLOP/s (cv::dnn::Net::getFLOPS / time)
 // and the machine's peak.
 //
+// Every model runs twice: with the detector's default, the 3 × 3 stride-1 convolutions by the
+// Winograd layer (detection/winograd_convolution.h), and with OpenCV's own convolution for every
+// layer (names ending in "/opencv_conv"). The FLOP bound is the direct convolution's in both.
+//
 // Run: devel/lib/grid_vision_fusion/bench_yolo [--benchmark_filter=tiny]
 //      devel/lib/grid_vision_fusion/bench_yolo --write-weights DIR   (writes yolov3-tiny.weights
 //      and yolov3.weights with these random values into DIR and exits: for run_pipeline
 //      --benchmark with a real network architecture)
 //      devel/lib/grid_vision_fusion/bench_yolo --profile [yolov3-416|yolov3-tiny-416|yolov3-608]
+//      [--opencv-conv]
 //      (per layer type: time from cv::dnn::Net::getPerfProfile, FLOPs, achieved GFLOP/s and the
 //      share of the frame; convolutions also by kernel size: where the time beyond the FLOP
 //      bound goes)
@@ -31,6 +36,7 @@
 #include <string>
 
 #include "grid_vision_fusion/cli/machine_info.h"
+#include "grid_vision_fusion/detection/winograd_convolution.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 
 namespace
@@ -96,6 +102,7 @@ struct Model
   std::string cfg;
   int input = 0;
   int iterations = 0;
+  bool winograd = true;  ///< false: OpenCV's convolution for every layer
 };
 
 void benchmarkModel(benchmark::State& state, const Model& model, const std::string& weights,
@@ -108,6 +115,7 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
   config.input_width = model.input;
   config.input_height = model.input;
   config.score_threshold = 0.5;
+  config.winograd = model.winograd;
   YoloDetector detector(config);
   cv::Mat image(375, 1242, CV_8UC3);
   cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
@@ -143,16 +151,20 @@ struct LayerGroup
 /// the convolutions, by kernel size and stride. Prints the tables; returns the process status.
 int profileModel(const Model& model, const std::string& weights, const MachineInfo& peak, int frames)
 {
-  cv::dnn::Net net = cv::dnn::readNetFromDarknet(kCfgDir + "/" + model.cfg, weights);
-  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
-  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   cv::Mat image(model.input, model.input, CV_8UC3);
   cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
   const cv::Mat blob =
       cv::dnn::blobFromImage(image, 1.0 / 255.0, cv::Size(), cv::Scalar(), true, false, CV_32F);
-  net.setInput(blob);
   std::vector<cv::Mat> outputs;
-  net.forward(outputs, net.getUnconnectedOutLayersNames());  // warm-up: allocations, layer fusion
+  cv::dnn::Net net;
+  {
+    const WinogradConvolutionScope winograd(model.winograd);  // until the layers exist
+    net = cv::dnn::readNetFromDarknet(kCfgDir + "/" + model.cfg, weights);
+    net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+    net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+    net.setInput(blob);
+    net.forward(outputs, net.getUnconnectedOutLayersNames());  // warm-up: allocations, layer fusion
+  }
   const cv::dnn::MatShape shape{1, 3, model.input, model.input};
   const std::vector<std::string> names = net.getLayerNames();
   std::vector<double> layer_ms(names.size(), 0.0);
@@ -181,7 +193,14 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
     ++type.layers;
     type.ms += ms;
     type.flops += flops;
-    if (layer->type == "Convolution" && !layer->blobs.empty() && layer->blobs[0].dims == 4)
+    if (layer->type == kWinogradLayerType)
+    {
+      LayerGroup& group = by_kernel["3x3 (Winograd)"];
+      ++group.layers;
+      group.ms += ms;
+      group.flops += flops;
+    }
+    else if (layer->type == "Convolution" && !layer->blobs.empty() && layer->blobs[0].dims == 4)
     {
       const auto* conv = dynamic_cast<const cv::dnn::ConvolutionLayer*>(layer.get());
       const cv::MatSize kernel = layer->blobs[0].size;
@@ -227,9 +246,10 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
 
 int main(int argc, char** argv)
 {
-  if ((argc == 2 || argc == 3) && std::string(argv[1]) == "--profile")
+  if (argc >= 2 && argc <= 4 && std::string(argv[1]) == "--profile")
   {
-    const std::string name = argc == 3 ? argv[2] : "yolov3-416";
+    const bool opencv_conv = std::string(argv[argc - 1]) == "--opencv-conv";
+    const std::string name = argc - (opencv_conv ? 1 : 0) == 3 ? argv[2] : "yolov3-416";
     const std::map<std::string, Model> known{
         {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},
         {"yolov3-416", {"yolov3-416", "yolov3.cfg", 416, 5}},
@@ -241,10 +261,13 @@ int main(int argc, char** argv)
                    name.c_str());
       return 2;
     }
+    Model profiled = model->second;
+    profiled.winograd = !opencv_conv;
     const MachineInfo machine = machineInfo();
     cv::setNumThreads(machine.cores);
-    std::printf("machine: %s\nopencv: %s, %d threads\n", machine.describe().c_str(),
-                cv::getVersionString().c_str(), cv::getNumThreads());
+    std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n", machine.describe().c_str(),
+                cv::getVersionString().c_str(), cv::getNumThreads(),
+                profiled.winograd && winogradSupported() ? "Winograd F(2x2, 3x3)" : "OpenCV's");
     char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
     if (mkdtemp(pattern) == nullptr)
     {
@@ -254,8 +277,8 @@ int main(int argc, char** argv)
     int status = 1;
     try
     {
-      status = profileModel(model->second, writeRandomWeights(kCfgDir + "/" + model->second.cfg, pattern),
-                            machine, model->second.iterations);
+      status = profileModel(profiled, writeRandomWeights(kCfgDir + "/" + profiled.cfg, pattern), machine,
+                            profiled.iterations);
     }
     catch (const std::exception& e)
     {
@@ -290,6 +313,9 @@ int main(int argc, char** argv)
   benchmark::AddCustomContext("peak", peak_text.str());
   benchmark::AddCustomContext(
       "opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");
+  benchmark::AddCustomContext("winograd", winogradSupported()
+                                              ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv"
+                                              : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution in both");
 
   char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
   if (mkdtemp(pattern) == nullptr)
@@ -298,9 +324,12 @@ int main(int argc, char** argv)
     return 1;
   }
   const std::string directory = pattern;
-  const std::vector<Model> models{{"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 10},
-                                  {"yolov3-416", "yolov3.cfg", 416, 3},
-                                  {"yolov3-608", "yolov3.cfg", 608, 2}};
+  const std::vector<Model> models{{"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 10, true},
+                                  {"yolov3-tiny-416/opencv_conv", "yolov3-tiny.cfg", 416, 10, false},
+                                  {"yolov3-416", "yolov3.cfg", 416, 3, true},
+                                  {"yolov3-416/opencv_conv", "yolov3.cfg", 416, 3, false},
+                                  {"yolov3-608", "yolov3.cfg", 608, 2, true},
+                                  {"yolov3-608/opencv_conv", "yolov3.cfg", 608, 2, false}};
   int status = 0;
   try
   {

@@ -153,6 +153,7 @@ void visitParams(DetectorParams& p, Visitor& v)
   v("onnx_layout", p.yolo.onnx_layout);
   v("dnn_backend", p.yolo.backend);
   v("dnn_target", p.yolo.target);
+  v("winograd", p.yolo.winograd);
   v("class_map", p.yolo.class_map);
   v("replay/directory", p.replay.directory);
   v("replay/file_pattern", p.replay.file_pattern);
