@@ -71,25 +71,76 @@ std::vector<float> transformKernels(const cv::Mat& weights, int outputs, int cha
   return u;
 }
 
+/// The even and the odd elements of the 16 floats lo, hi.
+__attribute__((target("avx2,fma"))) inline void deinterleave(__m256 lo, __m256 hi, __m256& even, __m256& odd)
+{
+  even = _mm256_castpd_ps(
+      _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0))), 0xD8));
+  odd = _mm256_castpd_ps(
+      _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1))), 0xD8));
+}
+
 /// V = Bᵀ d B of the 4 × 4 input tiles [first, first + count) of every channel, laid out
 /// [position][group of kNr tiles][c][kNr]; lanes beyond `count` are zero.
 /// Bᵀ = [1 0 −1 0; 0 1 1 0; 0 −1 1 0; 0 1 0 −1].
-void transformInputs(const float* x, const Geometry& geo, int first, int count, float* v)
+/// Eight neighbouring tiles of one tile row that lie inside the image go together: their inputs
+/// are 18 consecutive floats per row, the columns of the tiles the even and odd ones of them.
+__attribute__((target("avx2,fma"))) void transformInputs(const float* x, const Geometry& geo, int first, int count,
+                                                          float* v)
 {
   const int channels = geo.channels;
-  const std::size_t position_stride = static_cast<std::size_t>(kGroups) * channels * kNr;
+  const std::size_t ps = static_cast<std::size_t>(kGroups) * channels * kNr;  // position stride
   if (count < kBlockTiles)
   {
-    std::fill(v, v + kPositions * position_stride, 0.F);
+    std::fill(v, v + kPositions * ps, 0.F);
   }
   const std::size_t plane = static_cast<std::size_t>(geo.height) * geo.width;
-  for (int tt = 0; tt < count; ++tt)
+  const std::size_t width = static_cast<std::size_t>(geo.width);
+  for (int tt = 0; tt < count;)
   {
     const int tile = first + tt;
+    const int tx = tile % geo.tiles_x;
     const int y0 = 2 * (tile / geo.tiles_x) - geo.pad_top;
-    const int x0 = 2 * (tile % geo.tiles_x) - geo.pad_left;
-    const bool inside = y0 >= 0 && x0 >= 0 && y0 + 4 <= geo.height && x0 + 4 <= geo.width;
+    const int x0 = 2 * tx - geo.pad_left;
     float* out = v + (static_cast<std::size_t>(tt / kNr) * channels) * kNr + tt % kNr;
+    if (tt % kNr + 8 <= kNr && tt + 8 <= count && tx + 8 <= geo.tiles_x && y0 >= 0 && y0 + 4 <= geo.height &&
+        x0 >= 0 && x0 + 18 <= geo.width)
+    {
+      for (int c = 0; c < channels; ++c, out += kNr)
+      {
+        const float* src = x + c * plane + static_cast<std::size_t>(y0) * width + x0;
+        __m256 w[4][4];  // [window: x0, x0 + 8, x0 + 2, x0 + 10][row]
+        for (int i = 0; i < 4; ++i)
+        {
+          const float* row = src + i * width;
+          w[0][i] = _mm256_loadu_ps(row);
+          w[1][i] = _mm256_loadu_ps(row + 8);
+          w[2][i] = _mm256_loadu_ps(row + 2);
+          w[3][i] = _mm256_loadu_ps(row + 10);
+        }
+        __m256 r[4][4];  // Bᵀ d of every window: [window][row]
+        for (int q = 0; q < 4; ++q)
+        {
+          r[q][0] = _mm256_sub_ps(w[q][0], w[q][2]);
+          r[q][1] = _mm256_add_ps(w[q][1], w[q][2]);
+          r[q][2] = _mm256_sub_ps(w[q][2], w[q][1]);
+          r[q][3] = _mm256_sub_ps(w[q][1], w[q][3]);
+        }
+        for (int i = 0; i < 4; ++i)
+        {
+          __m256 c0, c1, c2, c3;  // tile columns 0..3 of the eight tiles
+          deinterleave(r[0][i], r[1][i], c0, c1);
+          deinterleave(r[2][i], r[3][i], c2, c3);
+          float* dst = out + static_cast<std::size_t>(4 * i) * ps;
+          _mm256_storeu_ps(dst, _mm256_sub_ps(c0, c2));
+          _mm256_storeu_ps(dst + ps, _mm256_add_ps(c1, c2));
+          _mm256_storeu_ps(dst + 2 * ps, _mm256_sub_ps(c2, c1));
+          _mm256_storeu_ps(dst + 3 * ps, _mm256_sub_ps(c1, c3));
+        }
+      }
+      tt += 8;
+      continue;
+    }
     for (int c = 0; c < channels; ++c, out += kNr)
     {
       const float* src = x + c * plane;
@@ -100,9 +151,7 @@ void transformInputs(const float* x, const Geometry& geo, int first, int count, 
         for (int j = 0; j < 4; ++j)
         {
           const int xx = x0 + j;
-          d[i][j] = inside || (yy >= 0 && yy < geo.height && xx >= 0 && xx < geo.width)
-                        ? src[static_cast<std::size_t>(yy) * geo.width + xx]
-                        : 0.F;
+          d[i][j] = yy >= 0 && yy < geo.height && xx >= 0 && xx < geo.width ? src[yy * width + xx] : 0.F;
         }
       }
       float r[4][4];  // Bᵀ d
@@ -115,13 +164,14 @@ void transformInputs(const float* x, const Geometry& geo, int first, int count, 
       }
       for (int i = 0; i < 4; ++i)
       {
-        float* dst = out + static_cast<std::size_t>(4 * i) * position_stride;
+        float* dst = out + static_cast<std::size_t>(4 * i) * ps;
         dst[0] = r[i][0] - r[i][2];
-        dst[position_stride] = r[i][1] + r[i][2];
-        dst[2 * position_stride] = r[i][2] - r[i][1];
-        dst[3 * position_stride] = r[i][1] - r[i][3];
+        dst[ps] = r[i][1] + r[i][2];
+        dst[2 * ps] = r[i][2] - r[i][1];
+        dst[3 * ps] = r[i][1] - r[i][3];
       }
     }
+    ++tt;
   }
 }
 
@@ -186,39 +236,78 @@ struct OutputStage
 
 /// Y = Aᵀ m A for output channels [k_first, k_last) of the tiles [first, first + count), with
 /// Aᵀ = [1 1 1 0; 0 1 −1 −1]; m is laid out [position][k − k_first][kBlockTiles], one position
-/// `position_stride` floats after the other.
-void transformOutputs(const float* m, std::size_t position_stride, int k_first, int k_last,
-                      const OutputStage& stage, const Geometry& geo, int first, int count, float* y)
+/// `position_stride` floats after the other. Eight neighbouring tiles of one tile row whose outputs
+/// lie inside the image go together (two rows of 16 consecutive outputs).
+__attribute__((target("avx2,fma"))) void transformOutputs(const float* m, std::size_t position_stride, int k_first,
+                                                           int k_last, const OutputStage& stage,
+                                                           const Geometry& geo, int first, int count, float* y)
 {
+  const std::size_t ps = position_stride;
   const std::size_t plane = static_cast<std::size_t>(geo.out_height) * geo.out_width;
+  const std::size_t width = static_cast<std::size_t>(geo.out_width);
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256 slope = _mm256_set1_ps(stage.slope);
   for (int k = k_first; k < k_last; ++k)
   {
     const float* row = m + static_cast<std::size_t>(k - k_first) * kBlockTiles;
     float* dst = y + k * plane;
-    for (int tt = 0; tt < count; ++tt)
+    const __m256 bias = _mm256_set1_ps(stage.bias[k]);
+    for (int tt = 0; tt < count;)
     {
+      const int tile = first + tt;
+      const int oy = 2 * (tile / geo.tiles_x);
+      const int tx = tile % geo.tiles_x;
+      const int ox = 2 * tx;
+      if (tt + 8 <= count && tx + 8 <= geo.tiles_x && oy + 2 <= geo.out_height && ox + 16 <= geo.out_width)
+      {
+        __m256 s[2][4];
+        for (int j = 0; j < 4; ++j)
+        {
+          const __m256 m0 = _mm256_loadu_ps(row + j * ps + tt);
+          const __m256 m1 = _mm256_loadu_ps(row + (4 + j) * ps + tt);
+          const __m256 m2 = _mm256_loadu_ps(row + (8 + j) * ps + tt);
+          const __m256 m3 = _mm256_loadu_ps(row + (12 + j) * ps + tt);
+          s[0][j] = _mm256_add_ps(_mm256_add_ps(m0, m1), m2);
+          s[1][j] = _mm256_sub_ps(_mm256_sub_ps(m1, m2), m3);
+        }
+        for (int i = 0; i < 2; ++i)
+        {
+          __m256 left = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(s[i][0], s[i][1]), s[i][2]), bias);
+          __m256 right = _mm256_add_ps(_mm256_sub_ps(_mm256_sub_ps(s[i][1], s[i][2]), s[i][3]), bias);
+          if (stage.relu)
+          {
+            left = _mm256_blendv_ps(left, _mm256_mul_ps(left, slope), _mm256_cmp_ps(left, zero, _CMP_LT_OQ));
+            right = _mm256_blendv_ps(right, _mm256_mul_ps(right, slope), _mm256_cmp_ps(right, zero, _CMP_LT_OQ));
+          }
+          const __m256 lo = _mm256_unpacklo_ps(left, right);
+          const __m256 hi = _mm256_unpackhi_ps(left, right);
+          float* out = dst + (oy + i) * width + ox;
+          _mm256_storeu_ps(out, _mm256_permute2f128_ps(lo, hi, 0x20));
+          _mm256_storeu_ps(out + 8, _mm256_permute2f128_ps(lo, hi, 0x31));
+        }
+        tt += 8;
+        continue;
+      }
       float s[2][4];
       for (int j = 0; j < 4; ++j)
       {
-        const float m0 = row[(0 + j) * position_stride + tt];
-        const float m1 = row[(4 + j) * position_stride + tt];
-        const float m2 = row[(8 + j) * position_stride + tt];
-        const float m3 = row[(12 + j) * position_stride + tt];
+        const float m0 = row[j * ps + tt];
+        const float m1 = row[(4 + j) * ps + tt];
+        const float m2 = row[(8 + j) * ps + tt];
+        const float m3 = row[(12 + j) * ps + tt];
         s[0][j] = m0 + m1 + m2;
         s[1][j] = m1 - m2 - m3;
       }
-      const int tile = first + tt;
-      const int oy = 2 * (tile / geo.tiles_x);
-      const int ox = 2 * (tile % geo.tiles_x);
       for (int i = 0; i < 2 && oy + i < geo.out_height; ++i)
       {
-        float* out = dst + static_cast<std::size_t>(oy + i) * geo.out_width + ox;
+        float* out = dst + (oy + i) * width + ox;
         out[0] = stage.apply(s[i][0] + s[i][1] + s[i][2], k);
         if (ox + 1 < geo.out_width)
         {
           out[1] = stage.apply(s[i][1] - s[i][2] - s[i][3], k);
         }
       }
+      ++tt;
     }
   }
 }
