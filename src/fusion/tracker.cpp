@@ -175,6 +175,7 @@ void Tracker::restart(Track& track, const TrackObservation& observation) const
       observation.has_velocity ? observation.vy : 0.0;
   track.covariance = Eigen::Vector4d(rp, rp, vs * vs, vs * vs).asDiagonal();
   track.history.clear();  // the displacement before a jump says nothing about the speed
+  track.observed.clear();
 }
 
 double Tracker::speedSigma(const Track& track) const
@@ -206,23 +207,31 @@ double Tracker::windowSpeed(const Track& track) const
   return (newest.tail<2>() - oldest.tail<2>()).norm() / (newest(0) - oldest(0));
 }
 
+std::size_t Tracker::middleIndex(const Track& track) const
+{
+  const double middle_stamp = 0.5 * (track.history.front()(0) + track.history.back()(0));
+  std::size_t middle = 0;
+  for (std::size_t i = 1; i < track.history.size(); ++i)
+  {
+    if (std::abs(track.history[i](0) - middle_stamp) < std::abs(track.history[middle](0) - middle_stamp))
+    {
+      middle = i;
+    }
+  }
+  return middle;
+}
+
 double Tracker::sustainedSpeed(const Track& track) const
 {
   if (!windowFilled(track))
   {
     return 0.0;
   }
-  const Eigen::Vector3d& oldest = track.history.front();
-  const Eigen::Vector3d& newest = track.history.back();
-  const double middle_stamp = 0.5 * (oldest(0) + newest(0));
-  const Eigen::Vector3d* middle = &oldest;
-  for (const Eigen::Vector3d& entry : track.history)
-  {
-    if (std::abs(entry(0) - middle_stamp) < std::abs((*middle)(0) - middle_stamp))
-    {
-      middle = &entry;
-    }
-  }
+  // The observed positions, not the filtered ones: the filter spreads a jump of the centre
+  // estimate over the images after it, where it would look like a steady displacement.
+  const Eigen::Vector3d& oldest = track.observed.front();
+  const Eigen::Vector3d& newest = track.observed.back();
+  const Eigen::Vector3d* middle = &track.observed[middleIndex(track)];
   const double first_span = (*middle)(0) - oldest(0);
   const double second_span = newest(0) - (*middle)(0);
   if (first_span <= 0.0 || second_span <= 0.0)
@@ -238,12 +247,39 @@ double Tracker::sustainedSpeed(const Track& track) const
   return std::min(first.norm() / first_span, second.norm() / second_span);
 }
 
+double Tracker::progressiveSpeed(const Track& track) const
+{
+  if (!windowFilled(track))
+  {
+    return 0.0;
+  }
+  const std::size_t middle = middleIndex(track);
+  const std::size_t last = track.observed.size() - 1;
+  if (last < middle + 3)
+  {
+    return 0.0;
+  }
+  const Eigen::Vector2d displacement = track.observed[last].tail<2>() - track.observed[middle].tail<2>();
+  for (std::size_t i = middle + 1; i <= last; ++i)
+  {
+    const Eigen::Vector2d step = track.observed[i].tail<2>() - track.observed[i - 1].tail<2>();
+    if (step.dot(displacement) <= 0.0 || step.norm() > 0.5 * displacement.norm())
+    {
+      return 0.0;
+    }
+  }
+  return (track.history[last].tail<2>() - track.history[middle].tail<2>()).norm() /
+         (track.history[last](0) - track.history[middle](0));
+}
+
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
   track.history.emplace_back(stamp_s, track.state(0), track.state(1));
+  track.observed.emplace_back(stamp_s, observation.x, observation.y);
   while (stamp_s - track.history.front()(0) > config_.motion_speed_window + 1e-9)
   {
     track.history.pop_front();
+    track.observed.pop_front();
   }
   const double total = static_cast<double>(observation.static_points) + observation.dynamic_points;
   double evidence = 0.0;
@@ -255,7 +291,8 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
   {
     const double filter_speed = track.state.tail<2>().norm();
     const double window_speed = windowSpeed(track);
-    if (std::min(filter_speed, sustainedSpeed(track)) > config_.motion_speed_threshold)
+    if (std::min(filter_speed, std::max(sustainedSpeed(track), progressiveSpeed(track))) >
+        config_.motion_speed_threshold)
     {
       evidence += config_.speed_evidence;
     }

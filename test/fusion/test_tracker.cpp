@@ -173,6 +173,59 @@ TEST(Tracker, ACarThatStartsIsDynamicWithinHalfASecond)
   }
 }
 
+/// An observation whose region the grid splits evenly (no evidence either way).
+TrackObservation undecided(double x, double y)
+{
+  TrackObservation o = observe("car", x, y, 400.F);
+  o.static_points = 5;
+  o.dynamic_points = 5;
+  return o;
+}
+
+TEST(Tracker, AStartFromRestCountsBeforeTheSustainedSpeedDoes)
+{
+  // Standing for 3 s (score −3), then rolling off at 2 m/s while the grid's regions stay split
+  // evenly. Half a window (0.5 s) after the start the second half of the history steps forward
+  // steadily; once the filter's speed passes 1 m/s too (0.6 s), +1.5 per image: dynamic after 3
+  // images (−3 → +1.5), 0.8 s after the start. The sustained speed alone needs its first half to
+  // move as well: one image later, still static at 0.8 s. (A window of 1 s and a threshold of
+  // 1 m/s, set here, keep these times whatever the defaults.)
+  TrackerConfig config;
+  config.motion_speed_window = 1.0;
+  config.motion_speed_threshold = 1.0;
+  Tracker tracker(config);
+  int k = 0;
+  for (; k < 30; ++k)
+  {
+    tracker.update(k * kFramePeriodS, {observe("car", 12.0, 3.0, 400.F)});
+  }
+  const int start = k;
+  for (; k <= start + 8; ++k)
+  {
+    const double x = 12.0 + 0.2 * (k - start + 1);
+    const Motion motion = tracker.update(k * kFramePeriodS, {undecided(x, 3.0)})[0].motion;
+    EXPECT_EQ(motion, k < start + 8 ? Motion::kStatic : Motion::kDynamic) << "image " << k - start;
+  }
+}
+
+TEST(Tracker, AJumpOfTheCentreEstimateIsNoStart)
+{
+  // A standing car whose centre estimate jumps by 1.5 m once (another cluster) and stays there:
+  // one step carries the whole displacement, so neither the sustained nor the progressive speed
+  // counts; the verdict stays static. (The filtered position, which spreads the jump over the
+  // next images, would pass the sustained test.)
+  Tracker tracker;
+  for (int k = 0; k < 60; ++k)
+  {
+    const double x = k < 30 ? 12.0 : 13.5;
+    const TrackEstimate e = tracker.update(k * kFramePeriodS, {undecided(x, 3.0)})[0];
+    if (k >= 20)
+    {
+      EXPECT_EQ(e.motion, Motion::kStatic) << "image " << k;
+    }
+  }
+}
+
 TEST(Tracker, TheFilterFindsTheVelocityFromPositionsAlone)
 {
   // No grid velocity: positions only, a car at (6, −2) m/s. After 3 s the filter's velocity is

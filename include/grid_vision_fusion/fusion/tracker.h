@@ -63,15 +63,19 @@ struct TrackerConfig
   double motion_min_dwell = 2.0;
   /// Weight of the track's own motion as evidence, >= 0 (0: the grid's evidence only): +weight
   /// when both the filter's speed and the sustained speed (the smaller of the average speeds of
-  /// the filtered position over the two halves of the last motion_speed_window, 0 when their
+  /// the observed position over the two halves of the last motion_speed_window, 0 when their
   /// directions differ by more than 90°: a jump of the centre estimate falls into one half only)
-  /// exceed motion_speed_threshold, −weight when both the filter's speed and the average speed
-  /// over the window are below half of it. Needs a track older than half the window. Above 1 it
-  /// outweighs a region vote that leans static: the grid does not resolve motion slower than
-  /// about a cell per scan, whose cells stay occupied and turn static.
+  /// or the progressive speed (the second half's alone, when its observed positions step
+  /// steadily forward: a start from rest) exceed motion_speed_threshold, −weight when both the
+  /// filter's speed and the average speed of the filtered position over the window are below
+  /// half of it. Needs a track older than half the window. Above 1 it outweighs a region vote
+  /// that leans static: the grid does not resolve motion slower than about a cell per scan,
+  /// whose cells stay occupied and turn static.
   double speed_evidence = 1.5;
-  double motion_speed_threshold = 1.0;  ///< [m/s], > 0
-  double motion_speed_window = 1.0;     ///< [s], > 0
+  /// [m/s], > 0. Below the 1 m/s that counts as moving: the sustained speed, a minimum of two
+  /// noisy averages, reads low.
+  double motion_speed_threshold = 0.8;
+  double motion_speed_window = 1.0;  ///< [s], > 0
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
   void validate() const;
@@ -152,6 +156,8 @@ private:
     double last_motion_change = 0.0;  ///< stamp of the last verdict change [s]
     /// Filtered positions of the last motion_speed_window: (stamp [s], x, y), oldest first.
     std::deque<Eigen::Vector3d> history;
+    /// The observed (unfiltered) positions of the same images: (stamp [s], x, y), oldest first.
+    std::deque<Eigen::Vector3d> observed;
   };
 
   void predict(Track& track, double dt) const;
@@ -171,6 +177,14 @@ private:
   /// more than 90° apart or the history is too short: a steady displacement passes, a single
   /// jump of the centre estimate (which falls into one half) does not.
   double sustainedSpeed(const Track& track) const;
+  /// A start from rest, which the sustained speed sees only half a window later: the average
+  /// speed of the filtered position over the second half of the history when the observed
+  /// positions of that half step forward along their displacement every time (at least 3
+  /// steps), none by more than half of it (a jump of the centre estimate is one big step, and
+  /// noise around a standing object steps back and forth); 0 otherwise.
+  double progressiveSpeed(const Track& track) const;
+  /// Index in the history of the entry nearest to the middle of its span.
+  std::size_t middleIndex(const Track& track) const;
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
 
   TrackerConfig config_;
