@@ -249,6 +249,11 @@ int main(int argc, char** argv)
   if (argc >= 2 && argc <= 4 && std::string(argv[1]) == "--profile")
   {
     const bool opencv_conv = std::string(argv[argc - 1]) == "--opencv-conv";
+    if (argc == 4 && !opencv_conv)
+    {
+      std::fprintf(stderr, "bench_yolo: --profile [MODEL] [--opencv-conv], not %s\n", argv[3]);
+      return 2;
+    }
     const std::string name = argc - (opencv_conv ? 1 : 0) == 3 ? argv[2] : "yolov3-416";
     const std::map<std::string, Model> known{
         {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},

@@ -369,9 +369,14 @@ public:
   /// Called before every fusion pass: back to the layer's own weights and no activation.
   void finalize(cv::InputArrayOfArrays /*inputs*/, cv::OutputArrayOfArrays /*outputs*/) override { reset(); }
 
-  /// Folds a following per-channel scale and shift (batch normalisation, Scale) into the weights.
+  /// Folds a following per-channel scale and shift (batch normalisation, Scale) into the weights;
+  /// not once an activation is fused (the scale would come after it).
   bool tryFuse(cv::Ptr<cv::dnn::Layer>& top) override
   {
+    if (stage_relu_)
+    {
+      return false;
+    }
     cv::Mat scale, shift;
     top->getScaleShift(scale, shift);
     const auto fits = [this](const cv::Mat& m)

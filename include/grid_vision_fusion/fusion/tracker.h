@@ -173,9 +173,10 @@ private:
   bool windowFilled(const Track& track) const;
   /// Average speed over the track's history (0 while it spans less than half the window).
   double windowSpeed(const Track& track) const;
-  /// The smaller of the average speeds over the two halves of the history, 0 when they point
-  /// more than 90° apart or the history is too short: a steady displacement passes, a single
-  /// jump of the centre estimate (which falls into one half) does not.
+  /// The smaller of the average speeds of the observed positions over the two halves of the
+  /// history, 0 when they point more than 90° apart or the history is too short: a steady
+  /// displacement passes, a single jump of the centre estimate (which falls into one half) does
+  /// not.
   double sustainedSpeed(const Track& track) const;
   /// A start from rest, which the sustained speed sees only half a window later: the average
   /// speed of the filtered position over the second half of the history when the observed
