@@ -270,8 +270,8 @@ int main(int argc, char** argv)
     profiled.winograd = !opencv_conv;
     const MachineInfo machine = machineInfo();
     cv::setNumThreads(machine.cores);
-    std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n", machine.describe().c_str(),
-                cv::getVersionString().c_str(), cv::getNumThreads(),
+    std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n",
+                machine.describe().c_str(), cv::getVersionString().c_str(), cv::getNumThreads(),
                 profiled.winograd && winogradSupported() ? "Winograd F(2x2, 3x3)" : "OpenCV's");
     char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
     if (mkdtemp(pattern) == nullptr)
@@ -318,9 +318,10 @@ int main(int argc, char** argv)
   benchmark::AddCustomContext("peak", peak_text.str());
   benchmark::AddCustomContext(
       "opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");
-  benchmark::AddCustomContext("winograd", winogradSupported()
-                                              ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv"
-                                              : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution in both");
+  benchmark::AddCustomContext("winograd",
+                              winogradSupported()
+                                  ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv"
+                                  : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution in both");
 
   char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
   if (mkdtemp(pattern) == nullptr)

@@ -85,8 +85,8 @@ __attribute__((target("avx2,fma"))) inline void deinterleave(__m256 lo, __m256 h
 /// Bᵀ = [1 0 −1 0; 0 1 1 0; 0 −1 1 0; 0 1 0 −1].
 /// Eight neighbouring tiles of one tile row that lie inside the image go together: their inputs
 /// are 18 consecutive floats per row, the columns of the tiles the even and odd ones of them.
-__attribute__((target("avx2,fma"))) void transformInputs(const float* x, const Geometry& geo, int first, int count,
-                                                          float* v)
+__attribute__((target("avx2,fma"))) void transformInputs(const float* x, const Geometry& geo, int first,
+                                                         int count, float* v)
 {
   const int channels = geo.channels;
   const std::size_t ps = static_cast<std::size_t>(kGroups) * channels * kNr;  // position stride
@@ -178,7 +178,7 @@ __attribute__((target("avx2,fma"))) void transformInputs(const float* x, const G
 /// C[kMr × kNr] = A[kMr × channels] · B[channels × kNr]; A is stored [c][kMr], B [c][kNr], C row
 /// by row with stride `ldc`.
 __attribute__((target("avx2,fma"))) void multiplyPanel(const float* a, const float* b, int channels, float* c,
-                                                        int ldc)
+                                                       int ldc)
 {
   __m256 c00 = _mm256_setzero_ps(), c01 = _mm256_setzero_ps(), c10 = _mm256_setzero_ps(),
          c11 = _mm256_setzero_ps(), c20 = _mm256_setzero_ps(), c21 = _mm256_setzero_ps(),
@@ -238,9 +238,9 @@ struct OutputStage
 /// Aᵀ = [1 1 1 0; 0 1 −1 −1]; m is laid out [position][k − k_first][kBlockTiles], one position
 /// `position_stride` floats after the other. Eight neighbouring tiles of one tile row whose outputs
 /// lie inside the image go together (two rows of 16 consecutive outputs).
-__attribute__((target("avx2,fma"))) void transformOutputs(const float* m, std::size_t position_stride, int k_first,
-                                                           int k_last, const OutputStage& stage,
-                                                           const Geometry& geo, int first, int count, float* y)
+__attribute__((target("avx2,fma"))) void transformOutputs(const float* m, std::size_t position_stride,
+                                                          int k_first, int k_last, const OutputStage& stage,
+                                                          const Geometry& geo, int first, int count, float* y)
 {
   const std::size_t ps = position_stride;
   const std::size_t plane = static_cast<std::size_t>(geo.out_height) * geo.out_width;
@@ -277,7 +277,8 @@ __attribute__((target("avx2,fma"))) void transformOutputs(const float* m, std::s
           if (stage.relu)
           {
             left = _mm256_blendv_ps(left, _mm256_mul_ps(left, slope), _mm256_cmp_ps(left, zero, _CMP_LT_OQ));
-            right = _mm256_blendv_ps(right, _mm256_mul_ps(right, slope), _mm256_cmp_ps(right, zero, _CMP_LT_OQ));
+            right =
+                _mm256_blendv_ps(right, _mm256_mul_ps(right, slope), _mm256_cmp_ps(right, zero, _CMP_LT_OQ));
           }
           const __m256 lo = _mm256_unpacklo_ps(left, right);
           const __m256 hi = _mm256_unpackhi_ps(left, right);
@@ -324,11 +325,11 @@ class WinogradConvolutionLayer : public cv::dnn::Layer
 public:
   WinogradConvolutionLayer(const cv::dnn::LayerParams& params, int pad_top, int pad_bottom, int pad_left,
                            int pad_right)
-    : cv::dnn::Layer(params)
-    , pad_top_(pad_top)
-    , pad_bottom_(pad_bottom)
-    , pad_left_(pad_left)
-    , pad_right_(pad_right)
+      : cv::dnn::Layer(params),
+        pad_top_(pad_top),
+        pad_bottom_(pad_bottom),
+        pad_left_(pad_left),
+        pad_right_(pad_right)
   {
     type = kWinogradLayerType;
     outputs_ = blobs[0].size[0];
@@ -344,7 +345,8 @@ public:
   {
     CV_CheckEQ(inputs.size(), static_cast<std::size_t>(1), "the Winograd convolution takes one input");
     const cv::dnn::MatShape& in = inputs[0];
-    CV_CheckEQ(in.size(), static_cast<std::size_t>(4), "the Winograd convolution takes an N x C x H x W blob");
+    CV_CheckEQ(in.size(), static_cast<std::size_t>(4),
+               "the Winograd convolution takes an N x C x H x W blob");
     CV_CheckEQ(in[1], channels_, "input channels differ from the kernels'");
     outputs.assign(1, cv::dnn::MatShape{in[0], outputs_, in[2] + pad_top_ + pad_bottom_ - 2,
                                         in[3] + pad_left_ + pad_right_ - 2});
@@ -379,8 +381,9 @@ public:
     }
     cv::Mat scale, shift;
     top->getScaleShift(scale, shift);
-    const auto fits = [this](const cv::Mat& m)
-    { return m.empty() || (m.type() == CV_32F && static_cast<int>(m.total()) == outputs_ && m.isContinuous()); };
+    const auto fits = [this](const cv::Mat& m) {
+      return m.empty() || (m.type() == CV_32F && static_cast<int>(m.total()) == outputs_ && m.isContinuous());
+    };
     if ((scale.empty() && shift.empty()) || !fits(scale) || !fits(shift))
     {
       return false;
@@ -389,8 +392,8 @@ public:
     {
       const float s = scale.empty() ? 1.F : scale.ptr<float>()[k];
       weights_.row(k) *= s;
-      bias_[static_cast<std::size_t>(k)] = bias_[static_cast<std::size_t>(k)] * s +
-                                           (shift.empty() ? 0.F : shift.ptr<float>()[k]);
+      bias_[static_cast<std::size_t>(k)] =
+          bias_[static_cast<std::size_t>(k)] * s + (shift.empty() ? 0.F : shift.ptr<float>()[k]);
     }
     transformed_.clear();
     return true;
@@ -487,8 +490,8 @@ private:
 
   /// One block of tiles, output panels [p_first, p_last): input transform, 16 products, output
   /// transform straight into the output blob.
-  void runTask(const float* x, const Geometry& geo, const OutputStage& stage, int block, int p_first, int p_last,
-               float* y) const
+  void runTask(const float* x, const Geometry& geo, const OutputStage& stage, int block, int p_first,
+               int p_last, float* y) const
   {
     const int first = block * kBlockTiles;
     const int count = std::min(kBlockTiles, geo.tiles() - first);
@@ -505,8 +508,8 @@ private:
     {
       for (int p = p_first; p < p_last; ++p)
       {
-        const float* a = transformed_.data() +
-                         ((static_cast<std::size_t>(pos) * geo.panels + p) * geo.channels) * kMr;
+        const float* a =
+            transformed_.data() + ((static_cast<std::size_t>(pos) * geo.panels + p) * geo.channels) * kMr;
         float* c = m.data() + pos * m_position + static_cast<std::size_t>((p - p_first) * kMr) * kBlockTiles;
         for (int g = 0; g < groups; ++g)
         {
@@ -515,7 +518,8 @@ private:
         }
       }
     }
-    transformOutputs(m.data(), m_position, p_first * kMr, std::min(geo.outputs, p_last * kMr), stage, geo, first, count, y);
+    transformOutputs(m.data(), m_position, p_first * kMr, std::min(geo.outputs, p_last * kMr), stage, geo,
+                     first, count, y);
   }
 
   int pad_top_, pad_bottom_, pad_left_, pad_right_;
@@ -535,14 +539,13 @@ cv::Ptr<cv::dnn::Layer> createConvolution(cv::dnn::LayerParams& params)
   cv::Ptr<cv::dnn::BaseConvolutionLayer> own = cv::dnn::ConvolutionLayer::create(params);
   const auto is = [](const std::vector<std::size_t>& values, std::size_t expected)
   { return values.size() == 2 && values[0] == expected && values[1] == expected; };
-  const bool eligible = is(own->kernel_size, 3) && is(own->strides, 1) && is(own->dilations, 1) &&
-                        own->padMode.empty() && own->pads_begin.size() == 2 && own->pads_end.size() == 2 &&
-                        params.get<int>("group", 1) == 1 && (params.blobs.size() == 1 || params.blobs.size() == 2) &&
-                        params.blobs[0].type() == CV_32F && params.blobs[0].dims == 4 &&
-                        params.blobs[0].size[1] >= kMinInputChannels &&
-                        (params.blobs.size() == 1 || (params.blobs[1].type() == CV_32F &&
-                                                      static_cast<int>(params.blobs[1].total()) ==
-                                                          params.blobs[0].size[0]));
+  const bool eligible =
+      is(own->kernel_size, 3) && is(own->strides, 1) && is(own->dilations, 1) && own->padMode.empty() &&
+      own->pads_begin.size() == 2 && own->pads_end.size() == 2 && params.get<int>("group", 1) == 1 &&
+      (params.blobs.size() == 1 || params.blobs.size() == 2) && params.blobs[0].type() == CV_32F &&
+      params.blobs[0].dims == 4 && params.blobs[0].size[1] >= kMinInputChannels &&
+      (params.blobs.size() == 1 || (params.blobs[1].type() == CV_32F &&
+                                    static_cast<int>(params.blobs[1].total()) == params.blobs[0].size[0]));
   if (!eligible)
   {
     return own;

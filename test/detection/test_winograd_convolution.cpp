@@ -67,9 +67,9 @@ std::pair<std::string, std::string> writeNetwork(const std::vector<ConvSpec>& la
     write(layer.filters, -0.5F, 0.5F);  // biases (the shift when batch-normalised)
     if (layer.batch_normalize)
     {
-      write(layer.filters, 0.5F, 1.5F);  // scales
+      write(layer.filters, 0.5F, 1.5F);   // scales
       write(layer.filters, -0.2F, 0.2F);  // rolling means
-      write(layer.filters, 0.5F, 2.0F);  // rolling variances
+      write(layer.filters, 0.5F, 2.0F);   // rolling variances
     }
     const float bound = 1.7F / std::sqrt(static_cast<float>(channels * layer.size * layer.size));
     write(layer.filters * channels * layer.size * layer.size, -bound, bound);
@@ -132,12 +132,12 @@ Pair loadPair(const std::vector<ConvSpec>& layers, const cv::Mat& first_input)
 }
 
 const std::vector<ConvSpec> kStack = {
-    {16, 3, 1, true, true, "leaky"},   // 3 input channels: OpenCV's
-    {32, 3, 1, true, true, "leaky"},   // Winograd, batch norm + leaky fused
-    {24, 3, 1, true, false, "linear"}, // Winograd, own bias, no activation
-    {20, 3, 1, false, true, "relu"},   // Winograd, no padding (output 2 px smaller), ReLU
-    {16, 3, 2, true, true, "leaky"},   // stride 2: OpenCV's
-    {8, 1, 1, true, false, "linear"},  // 1 × 1: OpenCV's
+    {16, 3, 1, true, true, "leaky"},    // 3 input channels: OpenCV's
+    {32, 3, 1, true, true, "leaky"},    // Winograd, batch norm + leaky fused
+    {24, 3, 1, true, false, "linear"},  // Winograd, own bias, no activation
+    {20, 3, 1, false, true, "relu"},    // Winograd, no padding (output 2 px smaller), ReLU
+    {16, 3, 2, true, true, "leaky"},    // stride 2: OpenCV's
+    {8, 1, 1, true, false, "linear"},   // 1 × 1: OpenCV's
 };
 
 class WinogradConvolutionTest : public ::testing::Test
@@ -228,11 +228,9 @@ TEST_F(WinogradConvolutionTest, DetectorFindsTheSameBoxesEitherWay)
 {
   // A small YOLO network whose middle layer is the Winograd layer's: the detector's default
   // (winograd: true) and OpenCV's convolution give the same detections.
-  const auto files = writeNetwork({{16, 3, 1, true, true, "leaky"},
-                                   {32, 3, 1, true, true, "leaky"},
-                                   {24, 1, 1, true, false, "linear"}},
-                                  11,
-                                  "[yolo]\nmask=0,1,2\nanchors=10,14, 23,27, 37,58\nclasses=3\nnum=3\n");
+  const auto files = writeNetwork(
+      {{16, 3, 1, true, true, "leaky"}, {32, 3, 1, true, true, "leaky"}, {24, 1, 1, true, false, "linear"}},
+      11, "[yolo]\nmask=0,1,2\nanchors=10,14, 23,27, 37,58\nclasses=3\nnum=3\n");
   const std::string names = std::filesystem::path(files.first).parent_path() / "net.names";
   std::ofstream(names) << "car\nperson\ntruck\n";
   YoloDetectorConfig config;
@@ -249,7 +247,8 @@ TEST_F(WinogradConvolutionTest, DetectorFindsTheSameBoxesEitherWay)
   EXPECT_EQ(own.description().find("Winograd"), std::string::npos) << own.description();
   const std::vector<Detection> expected = own.detect(image, PixelFormat::kBgr8);
   const std::vector<Detection> actual = winograd.detect(image, PixelFormat::kBgr8);
-  ASSERT_FALSE(expected.empty()) << "the random network must find something for the comparison to mean anything";
+  ASSERT_FALSE(expected.empty())
+      << "the random network must find something for the comparison to mean anything";
   ASSERT_EQ(actual.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i)
   {
