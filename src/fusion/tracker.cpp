@@ -175,7 +175,6 @@ void Tracker::restart(Track& track, const TrackObservation& observation) const
       observation.has_velocity ? observation.vy : 0.0;
   track.covariance = Eigen::Vector4d(rp, rp, vs * vs, vs * vs).asDiagonal();
   track.history.clear();  // the displacement before a jump says nothing about the speed
-  track.observed.clear();
 }
 
 double Tracker::speedSigma(const Track& track) const
@@ -193,7 +192,7 @@ double Tracker::speedSigma(const Track& track) const
 bool Tracker::windowFilled(const Track& track) const
 {
   return track.history.size() >= 2 &&
-         track.history.back()(0) - track.history.front()(0) >= 0.5 * config_.motion_speed_window;
+         track.history.back().stamp - track.history.front().stamp >= 0.5 * config_.motion_speed_window;
 }
 
 double Tracker::windowSpeed(const Track& track) const
@@ -202,18 +201,19 @@ double Tracker::windowSpeed(const Track& track) const
   {
     return 0.0;
   }
-  const Eigen::Vector3d& oldest = track.history.front();
-  const Eigen::Vector3d& newest = track.history.back();
-  return (newest.tail<2>() - oldest.tail<2>()).norm() / (newest(0) - oldest(0));
+  const Sample& oldest = track.history.front();
+  const Sample& newest = track.history.back();
+  return (newest.filtered - oldest.filtered).norm() / (newest.stamp - oldest.stamp);
 }
 
 std::size_t Tracker::middleIndex(const Track& track) const
 {
-  const double middle_stamp = 0.5 * (track.history.front()(0) + track.history.back()(0));
+  const double middle_stamp = 0.5 * (track.history.front().stamp + track.history.back().stamp);
   std::size_t middle = 0;
   for (std::size_t i = 1; i < track.history.size(); ++i)
   {
-    if (std::abs(track.history[i](0) - middle_stamp) < std::abs(track.history[middle](0) - middle_stamp))
+    if (std::abs(track.history[i].stamp - middle_stamp) <
+        std::abs(track.history[middle].stamp - middle_stamp))
     {
       middle = i;
     }
@@ -229,17 +229,17 @@ double Tracker::sustainedSpeed(const Track& track) const
   }
   // The observed positions, not the filtered ones: the filter spreads a jump of the centre
   // estimate over the images after it, where it would look like a steady displacement.
-  const Eigen::Vector3d& oldest = track.observed.front();
-  const Eigen::Vector3d& newest = track.observed.back();
-  const Eigen::Vector3d* middle = &track.observed[middleIndex(track)];
-  const double first_span = (*middle)(0) - oldest(0);
-  const double second_span = newest(0) - (*middle)(0);
+  const Sample& oldest = track.history.front();
+  const Sample& newest = track.history.back();
+  const Sample& middle = track.history[middleIndex(track)];
+  const double first_span = middle.stamp - oldest.stamp;
+  const double second_span = newest.stamp - middle.stamp;
   if (first_span <= 0.0 || second_span <= 0.0)
   {
     return 0.0;
   }
-  const Eigen::Vector2d first = middle->tail<2>() - oldest.tail<2>();
-  const Eigen::Vector2d second = newest.tail<2>() - middle->tail<2>();
+  const Eigen::Vector2d first = middle.observed - oldest.observed;
+  const Eigen::Vector2d second = newest.observed - middle.observed;
   if (first.dot(second) <= 0.0)
   {
     return 0.0;  // back and forth: no displacement that holds
@@ -254,32 +254,30 @@ double Tracker::progressiveSpeed(const Track& track) const
     return 0.0;
   }
   const std::size_t middle = middleIndex(track);
-  const std::size_t last = track.observed.size() - 1;
+  const std::size_t last = track.history.size() - 1;
   if (last < middle + 3)
   {
     return 0.0;
   }
-  const Eigen::Vector2d displacement = track.observed[last].tail<2>() - track.observed[middle].tail<2>();
+  const Eigen::Vector2d displacement = track.history[last].observed - track.history[middle].observed;
   for (std::size_t i = middle + 1; i <= last; ++i)
   {
-    const Eigen::Vector2d step = track.observed[i].tail<2>() - track.observed[i - 1].tail<2>();
+    const Eigen::Vector2d step = track.history[i].observed - track.history[i - 1].observed;
     if (step.dot(displacement) <= 0.0 || step.norm() > 0.5 * displacement.norm())
     {
       return 0.0;
     }
   }
-  return (track.history[last].tail<2>() - track.history[middle].tail<2>()).norm() /
-         (track.history[last](0) - track.history[middle](0));
+  return (track.history[last].filtered - track.history[middle].filtered).norm() /
+         (track.history[last].stamp - track.history[middle].stamp);
 }
 
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
-  track.history.emplace_back(stamp_s, track.state(0), track.state(1));
-  track.observed.emplace_back(stamp_s, observation.x, observation.y);
-  while (stamp_s - track.history.front()(0) > config_.motion_speed_window + 1e-9)
+  track.history.push_back({stamp_s, track.state.head<2>(), Eigen::Vector2d(observation.x, observation.y)});
+  while (stamp_s - track.history.front().stamp > config_.motion_speed_window + 1e-9)
   {
     track.history.pop_front();
-    track.observed.pop_front();
   }
   const double total = static_cast<double>(observation.static_points) + observation.dynamic_points;
   double evidence = 0.0;

@@ -138,6 +138,14 @@ public:
   std::size_t size() const { return tracks_.size(); }
 
 private:
+  /// One image of a track: its stamp [s], the filtered and the observed (unfiltered) position.
+  struct Sample
+  {
+    double stamp = 0.0;
+    Eigen::Vector2d filtered;
+    Eigen::Vector2d observed;
+  };
+
   struct Track
   {
     std::uint32_t id = 0;
@@ -154,10 +162,8 @@ private:
     bool decided = false;  ///< the motion score has reached a threshold once
     bool has_motion_change = false;
     double last_motion_change = 0.0;  ///< stamp of the last verdict change [s]
-    /// Filtered positions of the last motion_speed_window: (stamp [s], x, y), oldest first.
-    std::deque<Eigen::Vector3d> history;
-    /// The observed (unfiltered) positions of the same images: (stamp [s], x, y), oldest first.
-    std::deque<Eigen::Vector3d> observed;
+    /// The images of the last motion_speed_window, oldest first.
+    std::deque<Sample> history;
   };
 
   void predict(Track& track, double dt) const;
