@@ -548,44 +548,28 @@ BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& i
   BagMessage m;
   while (reader.next(m))
   {
-    const std::string& topic = m.topic;
-    bool known_type = true;
-    if (topic == topics.tf || topic == topics.tf_static)
+    // The reader instantiated the message of the type its topic needs; the view holds only the
+    // pipeline's topics, so none instantiated means a message of another type there.
+    if (m.tf)
     {
-      known_type = static_cast<bool>(m.tf);
-      if (m.tf)
-      {
-        pipeline.addTf(*m.tf, topic == topics.tf_static);
-      }
+      pipeline.addTf(*m.tf, m.topic == topics.tf_static);
     }
-    else if (topic == topics.points)
+    else if (m.cloud)
     {
-      known_type = static_cast<bool>(m.cloud);
-      if (m.cloud)
-      {
-        pipeline.addCloud(m.cloud);
-      }
+      pipeline.addCloud(m.cloud);
     }
-    else if (topic == topics.image)
+    else if (m.image)
     {
-      known_type = static_cast<bool>(m.image);
-      if (m.image)
-      {
-        pipeline.addImage(m.image);
-        ++summary.frames;
-      }
+      pipeline.addImage(m.image);
+      ++summary.frames;
     }
-    else if (topic == topics.camera_info)
+    else if (m.info)
     {
-      known_type = static_cast<bool>(m.info);
-      if (m.info)
-      {
-        pipeline.addCameraInfo(m.info);
-      }
+      pipeline.addCameraInfo(m.info);
     }
-    if (!known_type)
+    else
     {
-      throw std::runtime_error("topic " + topic + " of " + input_bag + " holds " + m.datatype +
+      throw std::runtime_error("topic " + m.topic + " of " + input_bag + " holds " + m.datatype +
                                " messages, not the type run_pipeline expects there");
     }
     if (summary.messages_read == 0)
@@ -595,7 +579,7 @@ BagRunSummary runPipelineOnBagUnchecked(Pipeline& pipeline, const std::string& i
     last = m.time;
     ++summary.messages_read;
     pipeline.advanceTo(m.time);
-    if (topic == topics.image)
+    if (m.topic == topics.image)
     {
       summary.rss_mb.push_back(residentMemoryMiB());
     }
