@@ -326,9 +326,9 @@ DynamicGridFilter::DynamicGridFilter(const DynamicGridConfig& config)
   block_sum_.resize(blocks);
   block_start_.resize(blocks + 1);
   block_candidates_.resize(blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock));
-  band_order_.resize(n);
-  band_start_.resize(blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock) + 1);
-  block_counts_.resize(blockCount(n, kParticleBlock) * (band_start_.size() - 1));
+  band_particles_.resize(blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock));
+  block_counts_.resize(blockCount(n, kParticleBlock) * band_particles_.size());
+  part_band_ = {0, band_particles_.size()};
   reset();
 }
 
@@ -375,10 +375,11 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
   const std::size_t n = p.size();
   // Eq. 4: the particle keeps the fraction `keep` of its mass as dynamic; the rest becomes
   // static or unknown mass of the cell it arrives in. One thread adds each particle's masses to
-  // its cell as it moves (particle order); several move the particles in blocks, then add the
-  // masses per band of cell rows, each band's particles in particle order: the same sums.
+  // its cell as it moves (particle order); several move the particles in blocks, counting them
+  // per band of rows, then add the masses per part of the grid (forParticlesByCellPart): the
+  // same sums.
   const bool serial = parallel_.threads() == 1;
-  const std::size_t bands = band_start_.size() - 1;
+  const std::size_t bands = band_particles_.size();
   const auto band_cells = static_cast<std::size_t>(kRowBlock * geometry_.width);
   parallel_.run(blockCount(n, kParticleBlock),
                 [&](std::size_t b)
@@ -432,40 +433,34 @@ void DynamicGridFilter::predictParticles(float dt, float keep, float to_static, 
   {
     return;
   }
-  sortParticlesByBand(true);
-  parallel_.run(band_start_.size() - 1,
-                [&](std::size_t band)
-                {
-                  for (std::size_t k = band_start_[band]; k < band_start_[band + 1]; ++k)
-                  {
-                    const std::uint32_t i = band_order_[k];
-                    const auto cell = static_cast<std::size_t>(p.cell[i]);
-                    const float w = p.weight[i];
-                    pred_dynamic_[cell] += w * keep;
-                    from_dynamic_static_[cell] += w * to_static;
-                    from_dynamic_unknown_[cell] += w * to_unknown;
-                    p.weight[i] = w * keep;
-                  }
-                });
+  splitCellsByParticles(true);
+  forParticlesByCellPart(
+      [&](std::size_t i)
+      {
+        const auto cell = static_cast<std::size_t>(p.cell[i]);
+        const float w = p.weight[i];
+        pred_dynamic_[cell] += w * keep;
+        from_dynamic_static_[cell] += w * to_static;
+        from_dynamic_unknown_[cell] += w * to_unknown;
+        p.weight[i] = w * keep;
+      });
 }
 
-void DynamicGridFilter::sortParticlesByBand(bool counted)
+void DynamicGridFilter::splitCellsByParticles(bool counted)
 {
-  // Counting sort: per block, the particles of each band; the exclusive prefix, band by band and
-  // in block order within a band, gives each block its slots; within a band the indices increase.
+  // A task that goes through every particle costs a pass over p.cell; one part per thread keeps
+  // that to one pass per thread. The split changes with the thread count, the sums do not
+  // (forParticlesByCellPart).
   const ParticleArrays& p = particles_;
   const std::size_t n = p.size();
   const std::size_t blocks = blockCount(n, kParticleBlock);
-  const std::size_t bands = band_start_.size() - 1;
+  const std::size_t bands = band_particles_.size();
   const auto band_cells = static_cast<std::int32_t>(kRowBlock * geometry_.width);
-  if (!counted)
-  {
-    std::fill(block_counts_.begin(), block_counts_.end(), 0);
-  }
   parallel_.run(counted ? 0 : blocks,
                 [&](std::size_t b)
                 {
                   std::size_t* counts = block_counts_.data() + b * bands;
+                  std::fill(counts, counts + bands, 0);
                   const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
                   for (std::size_t i = b * kParticleBlock; i < end; ++i)
                   {
@@ -478,27 +473,45 @@ void DynamicGridFilter::sortParticlesByBand(bool counted)
   std::size_t total = 0;
   for (std::size_t band = 0; band < bands; ++band)
   {
-    band_start_[band] = total;
+    std::size_t count = 0;
     for (std::size_t b = 0; b < blocks; ++b)
     {
-      std::size_t& slot = block_counts_[b * bands + band];
-      const std::size_t count = slot;
-      slot = total;
-      total += count;
+      count += block_counts_[b * bands + band];
+    }
+    band_particles_[band] = count;
+    total += count;
+  }
+  const auto parts = static_cast<std::size_t>(parallel_.threads());
+  part_band_.assign(parts + 1, bands);
+  part_band_[0] = 0;
+  std::size_t cumulative = 0;
+  std::size_t part = 1;
+  for (std::size_t band = 0; band < bands && part < parts; ++band)
+  {
+    cumulative += band_particles_[band];
+    while (part < parts && cumulative * parts >= total * part)
+    {
+      part_band_[part++] = band + 1;
     }
   }
-  band_start_[bands] = total;
-  parallel_.run(blocks,
-                [&](std::size_t b)
+}
+
+template <typename F>
+void DynamicGridFilter::forParticlesByCellPart(const F& f) const
+{
+  const std::int32_t* cell = particles_.cell.data();
+  const std::size_t n = particles_.size();
+  const auto band_cells = static_cast<std::int32_t>(kRowBlock * geometry_.width);
+  parallel_.run(part_band_.size() - 1,
+                [&](std::size_t part)
                 {
-                  std::size_t* next = block_counts_.data() + b * bands;
-                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
-                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  const auto begin = static_cast<std::int32_t>(part_band_[part]) * band_cells;
+                  const auto end = static_cast<std::int32_t>(part_band_[part + 1]) * band_cells;
+                  for (std::size_t i = 0; i < n; ++i)
                   {
-                    if (p.cell[i] >= 0)
+                    if (cell[i] >= begin && cell[i] < end)
                     {
-                      band_order_[next[static_cast<std::size_t>(p.cell[i] / band_cells)]++] =
-                          static_cast<std::uint32_t>(i);
+                      f(i);
                     }
                   }
                 });
@@ -650,7 +663,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
       {
         const auto begin = static_cast<std::ptrdiff_t>(geometry_.index(r_begin, 0));
         const auto end = static_cast<std::ptrdiff_t>(geometry_.index(r_end, 0));
-        for (std::vector<float>* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_})
+        for (GridArray<float>* v : {&pred_dynamic_, &from_dynamic_static_, &from_dynamic_unknown_})
         {
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
@@ -660,7 +673,6 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
   }
   ParticleArrays& p = particles_;
-  const std::size_t n = p.size();
 
   // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
   const float inv_information = 1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5,
@@ -754,7 +766,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
         // 2 threads (bench_dynamic_grid).
         const auto begin = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_begin) * gw);
         const auto end = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(r_end) * gw);
-        for (std::vector<float>* v : {&stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
+        for (GridArray<float>* v : {&stat_w_, &stat_vx_, &stat_vy_, &stat_vxx_, &stat_vyy_})
         {
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
@@ -762,8 +774,8 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
 
   // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
   // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
-  // Per cell sums in particle order: one loop with one thread, per band (sortParticlesByBand,
-  // the cells have not changed since the prediction) with several.
+  // Per cell sums in particle order, per part of the grid (the split of the prediction: the
+  // cells have not changed since).
   auto accumulate = [&](std::size_t i)
   {
     const std::int32_t ci = p.cell[i];
@@ -782,28 +794,11 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     stat_vxx_[c] += w * vx * vx;
     stat_vyy_[c] += w * vy * vy;
   };
-  if (parallel_.threads() == 1)
+  if (first && parallel_.threads() > 1)
   {
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      accumulate(i);
-    }
+    splitCellsByParticles(false);  // no prediction on the first scan
   }
-  else
-  {
-    if (first)
-    {
-      sortParticlesByBand(false);  // no prediction on the first scan
-    }
-    parallel_.run(band_start_.size() - 1,
-                  [&](std::size_t band)
-                  {
-                    for (std::size_t k = band_start_[band]; k < band_start_[band + 1]; ++k)
-                    {
-                      accumulate(band_order_[k]);
-                    }
-                  });
-  }
+  forParticlesByCellPart(accumulate);
   const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)

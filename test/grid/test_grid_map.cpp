@@ -1,6 +1,11 @@
 // GridGeometry and the integer-cell shift of the cell states.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <set>
+#include <vector>
+
+#include "grid_vision_fusion/grid/grid_array.h"
 #include "grid_vision_fusion/grid/grid_map.h"
 
 namespace grid_vision_fusion
@@ -27,6 +32,32 @@ TEST(GridGeometry, CellOfUsesTheLatticeOrigin)
   EXPECT_FALSE(g.cellOf(0.0, 0.99, row, col));
   EXPECT_DOUBLE_EQ(g.cellCenterX(0), -1.75);
   EXPECT_DOUBLE_EQ(g.cellCenterY(4), 3.25);
+}
+
+TEST(GridArray, LargeArraysStartAtDifferentCacheLinesOfAPage)
+{
+  // 16 arrays of a 300 x 300 grid, allocated one after the other as the filter does: each starts
+  // on a cache line, no two at the same offset within a page (std::vector's would all come from
+  // mmap at the same offset).
+  std::vector<GridArray<float>> arrays;
+  std::set<std::uintptr_t> page_offsets;
+  for (int k = 0; k < 16; ++k)
+  {
+    arrays.emplace_back(300 * 300, static_cast<float>(k));
+    const auto address = reinterpret_cast<std::uintptr_t>(arrays.back().data());
+    EXPECT_EQ(address % 64, 0U) << "array " << k;
+    page_offsets.insert(address % 4096);
+  }
+  EXPECT_EQ(page_offsets.size(), arrays.size());
+  // The storage behaves as a vector's: contents kept when it grows, copies equal, freed in any
+  // order (the sanitizer build checks the frees).
+  GridArray<float> grown = arrays[3];
+  grown.resize(400 * 400, -1.0F);
+  EXPECT_EQ(grown[300 * 300 - 1], 3.0F);
+  EXPECT_EQ(grown[300 * 300], -1.0F);
+  EXPECT_EQ(GridArray<float>(arrays[5]), arrays[5]);
+  arrays.erase(arrays.begin() + 2);
+  arrays.clear();
 }
 
 TEST(ShiftCells, MovesContentByWholeCellsAndFillsUnknown)

@@ -25,19 +25,20 @@ constexpr double kSensorHeight = 1.73;
 constexpr double kPeriod = 0.1;
 
 // Bit-for-bit equality (unlike ==, tells -0 from +0 and compares NaN payloads).
-template <typename T>
-bool sameBits(const std::vector<T>& a, const std::vector<T>& b)
+template <typename Vector>
+bool sameBits(const Vector& a, const Vector& b)
 {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(typename Vector::value_type)) == 0);
 }
 
 // Index of the first element whose bits differ (for the failure message), or the size.
-template <typename T>
-std::size_t firstDifference(const std::vector<T>& a, const std::vector<T>& b)
+template <typename Vector>
+std::size_t firstDifference(const Vector& a, const Vector& b)
 {
   for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
   {
-    if (std::memcmp(&a[i], &b[i], sizeof(T)) != 0)
+    if (std::memcmp(&a[i], &b[i], sizeof(a[i])) != 0)
     {
       return i;
     }
@@ -54,7 +55,7 @@ struct SceneRun
   std::vector<CellStates> cells;
   std::vector<ParticleArrays> particles;
   std::vector<std::vector<float>> occupancy;
-  std::vector<std::vector<float>> evidence;
+  std::vector<GridArray<float>> evidence;
 };
 
 // A scene with everything the filter does: the ego driving along +x (grid shifts), parked boxes,

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/grid/grid_array.h"
 #include "grid_vision_fusion/grid/grid_map.h"
 #include "grid_vision_fusion/grid/inverse_sensor_model.h"
 #include "grid_vision_fusion/grid/parallel_blocks.h"
@@ -139,12 +140,12 @@ enum class CellClass : std::uint8_t
 /// Particles as a structure of arrays; positions relative to the corner of grid cell (0,0).
 struct ParticleArrays
 {
-  std::vector<float> x;            ///< [m] from the grid origin along +x
-  std::vector<float> y;            ///< [m] from the grid origin along +y
-  std::vector<float> vx;           ///< [m/s]
-  std::vector<float> vy;           ///< [m/s]
-  std::vector<float> weight;       ///< absolute dynamic mass; the sum over a cell is its persistent P(D)
-  std::vector<std::int32_t> cell;  ///< row-major cell index, -1 when outside the grid
+  GridArray<float> x;            ///< [m] from the grid origin along +x
+  GridArray<float> y;            ///< [m] from the grid origin along +y
+  GridArray<float> vx;           ///< [m/s]
+  GridArray<float> vy;           ///< [m/s]
+  GridArray<float> weight;       ///< absolute dynamic mass; the sum over a cell is its persistent P(D)
+  GridArray<std::int32_t> cell;  ///< row-major cell index, -1 when outside the grid
 
   void resize(std::size_t n);
   std::size_t size() const { return weight.size(); }
@@ -182,7 +183,7 @@ public:
   double lastStamp() const { return last_stamp_; }
 
   /// Motion evidence per cell in [0, 1] after the last cycle (see DynamicGridConfig::motion_window).
-  const std::vector<float>& motionEvidence() const { return motion_evidence_; }
+  const GridArray<float>& motionEvidence() const { return motion_evidence_; }
 
   /// Replaces the classification thresholds (dynamic_threshold, min_dynamic_speed,
   /// mahalanobis_threshold, occupied_threshold) by those of `thresholds`; they only affect
@@ -198,10 +199,15 @@ private:
   template <typename F>
   void forRowBlocks(const F& f) const;
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
-  /// With several threads: particle indices (cell >= 0) sorted by band of cell rows, stably, so
-  /// that per-cell sums over a band's particles add in particle order (as one thread does).
-  /// `counted`: block_counts_ already holds the particles per (particle block, band).
-  void sortParticlesByBand(bool counted);
+  /// Cuts the grid into one part of whole bands of kRowBlock rows per thread, with about as many
+  /// particles each (part_band_). `counted`: block_counts_ already holds the particles per
+  /// (particle block, band).
+  void splitCellsByParticles(bool counted);
+  /// f(i) for every particle i with a cell, one task per part of the grid (splitCellsByParticles)
+  /// that goes through all particles in order and takes those in its cells: the per-cell sums f
+  /// makes add each cell's particles in particle order, as one thread does, whatever the split.
+  template <typename F>
+  void forParticlesByCellPart(const F& f) const;
   std::size_t birthAndResample(std::size_t& born, float dt);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
@@ -222,29 +228,29 @@ private:
   ParticleArrays resampled_;
   std::vector<float> occupancy_;
   // per-cell scratch
-  std::vector<float> pred_dynamic_;          // persistent predicted dynamic mass (particles)
-  std::vector<float> from_dynamic_static_;   // D -> S mass arriving with particles
-  std::vector<float> from_dynamic_unknown_;  // D -> U mass arriving with particles
-  std::vector<float> newborn_;               // posterior newborn dynamic mass
-  std::vector<float> persistent_factor_;
+  GridArray<float> pred_dynamic_;          // persistent predicted dynamic mass (particles)
+  GridArray<float> from_dynamic_static_;   // D -> S mass arriving with particles
+  GridArray<float> from_dynamic_unknown_;  // D -> U mass arriving with particles
+  GridArray<float> newborn_;               // posterior newborn dynamic mass
+  GridArray<float> persistent_factor_;
   // newborn mass by origin, as shares of the cell's newborn mass, and the velocity (mean,
   // variance per axis) their particles take
-  std::vector<float> vacated_share_;     // vacated_to_dynamic: the velocity that left the cell
-  std::vector<float> start_share_;       // static_to_dynamic_by_motion: motion-driven velocity
-  std::vector<float> propagated_share_;  // propagation_rate: the source cell's velocity
-  std::vector<float> left_vx_, left_vy_, left_var_x_, left_var_y_;
-  std::vector<float> source_vx_, source_vy_, source_var_x_, source_var_y_, source_weight_;
-  std::vector<float> stat_w_, stat_vx_, stat_vy_, stat_vxx_, stat_vyy_;
+  GridArray<float> vacated_share_;     // vacated_to_dynamic: the velocity that left the cell
+  GridArray<float> start_share_;       // static_to_dynamic_by_motion: motion-driven velocity
+  GridArray<float> propagated_share_;  // propagation_rate: the source cell's velocity
+  GridArray<float> left_vx_, left_vy_, left_var_x_, left_var_y_;
+  GridArray<float> source_vx_, source_vy_, source_var_x_, source_var_y_, source_weight_;
+  GridArray<float> stat_w_, stat_vx_, stat_vy_, stat_vxx_, stat_vyy_;
   // birth scratch
-  std::vector<std::int32_t> birth_cell_;
-  std::vector<float> birth_x_, birth_y_, birth_vx_, birth_vy_, birth_w_;
+  GridArray<std::int32_t> birth_cell_;
+  GridArray<float> birth_x_, birth_y_, birth_vx_, birth_vy_, birth_w_;
   // motion-driven birth
-  std::vector<std::uint8_t> occupied_mask_;  // measured occupied (p_o > 1/2) in the last scan
-  std::vector<std::uint8_t> previous_mask_;  // the same for the scan before, shifted with the grid
+  GridArray<std::uint8_t> occupied_mask_;  // measured occupied (p_o > 1/2) in the last scan
+  GridArray<std::uint8_t> previous_mask_;  // the same for the scan before, shifted with the grid
   // motion evidence: scans since the cell last held obstacle points (low byte) / was seen
   // clearly free (high byte), each saturating at 255, shifted with the grid; the evidence itself
-  std::vector<std::uint16_t> ages_, age_scratch_;
-  std::vector<float> motion_evidence_, evidence_scratch_;
+  GridArray<std::uint16_t> ages_, age_scratch_;
+  GridArray<float> motion_evidence_, evidence_scratch_;
   std::vector<std::int32_t> vacated_count_;  // summed-area table of the vacated cells
   std::vector<std::size_t> isolated_;        // scratch: vacated cells without a vacated neighbour
   std::vector<std::int32_t> vacated_;        // cells occupied in the previous scan, free now
@@ -255,8 +261,8 @@ private:
   std::vector<double> block_sum_;
   std::vector<double> block_start_;
   std::vector<std::size_t> block_counts_;
-  std::vector<std::uint32_t> band_order_;  // particle indices sorted by band (sortParticlesByBand)
-  std::vector<std::size_t> band_start_;    // first index of band_order_ per band
+  std::vector<std::size_t> band_particles_;  // particles per band of kRowBlock rows
+  std::vector<std::size_t> part_band_;       // first band of each part of the grid, then the band count
   std::vector<std::vector<std::int32_t>> block_candidates_;  // per row block: vacated cells, candidates
   int bucket_cols_ = 0;
   int bucket_rows_ = 0;

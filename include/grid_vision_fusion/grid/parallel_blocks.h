@@ -67,8 +67,8 @@ inline std::size_t blockCount(std::size_t items, std::size_t block)
 }
 
 /// Sets every element of `v` to `value`, in blocks of 2^15 elements on the threads of `parallel`.
-template <typename T>
-void parallelFill(const ParallelBlocks& parallel, std::vector<T>& v, const T& value)
+template <typename Vector>
+void parallelFill(const ParallelBlocks& parallel, Vector& v, const typename Vector::value_type& value)
 {
   constexpr std::size_t kBlock = std::size_t{1} << 15;
   parallel.run(blockCount(v.size(), kBlock),
