@@ -4,7 +4,9 @@
 // and of the whole cycle [ms] (counters *_median_ms), for the default grid and particle count,
 // for 2^15 .. 2^19 particles and for 150^2 .. 600^2 cells, on 1 and 2 threads for the defaults
 // (BM_CycleDefaults/threads:N; the ratio of their cycle medians is printed at the end; the
-// other cases run on one thread). Not a test: run it by hand,
+// other cases run on one thread), and the two thread counts in turns on the same scans
+// (BM_CycleThreadRatio, runs of 8 scans in turns: the figure of the thread target). Not a test: run
+// it by hand,
 //   devel/lib/grid_vision_fusion/bench_dynamic_grid
 // and record the figures in doc/benchmarks.md.
 #include <benchmark/benchmark.h>
@@ -130,35 +132,66 @@ std::map<int, double>& cycleMedianByThreads()
   return medians;
 }
 
-// One iteration = one filter cycle on the next scan of the sequence (warm: the first 10 scans
-// are run before timing; the sequence restarts with a reset outside the timing).
+// A filter fed the scans of the sequence in turn, warm (the first 10 scans run before timing);
+// restart() resets it and warms it again once the sequence is through.
+class ScanFeeder
+{
+public:
+  explicit ScanFeeder(const DynamicGridConfig& config) : filter_(config) { warm(); }
+
+  bool atEnd() const { return k_ == 0; }
+
+  void restart()
+  {
+    filter_.reset();
+    warm();
+  }
+
+  // One cycle on the next scan; cpu_ms / process_cpu_ms: its CPU time on the calling thread /
+  // on all threads of the process.
+  DynamicGridCycle next()
+  {
+    const Scan& scan = scans()[static_cast<std::size_t>(k_)];
+    const double cpu_start = threadCpuMs();
+    const double process_start = processCpuMs();
+    const DynamicGridCycle cycle =
+        filter_.update(PointCloudView::packedXyz(scan.xyz.data(), scan.xyz.size() / 3), scan.pose, stamp_);
+    cpu_ms = threadCpuMs() - cpu_start;
+    process_cpu_ms = processCpuMs() - process_start;
+    stamp_ += kPeriod;
+    k_ = (k_ + 1) % kScans;
+    return cycle;
+  }
+
+  double cpu_ms = 0.0;
+  double process_cpu_ms = 0.0;
+
+private:
+  void warm()
+  {
+    for (int i = 0; i < 10; ++i)
+    {
+      next();
+    }
+  }
+
+  DynamicGridFilter filter_;
+  int k_ = 0;
+  double stamp_ = 0.0;
+};
+
+double cycleMs(const DynamicGridCycle& cycle)
+{
+  return 1e3 * (cycle.sensor_model_seconds + cycle.filter_seconds);
+}
+
+// One iteration = one filter cycle on the next scan of the sequence (the sequence restarts with
+// a reset outside the timing).
 // cycle_cpu_median_ms is the CPU time of the calling thread only: with several threads it
 // leaves out the work of the others, which cycle_process_cpu_median_ms (all threads) includes.
 double runCycles(benchmark::State& state, const DynamicGridConfig& config)
 {
-  const std::vector<Scan>& sequence = scans();
-  DynamicGridFilter filter(config);
-  int k = 0;
-  double stamp = 0.0;
-  double cpu_ms = 0.0;
-  double process_cpu_ms = 0.0;
-  auto next = [&]()
-  {
-    const Scan& scan = sequence[static_cast<std::size_t>(k)];
-    const double cpu_start = threadCpuMs();
-    const double process_start = processCpuMs();
-    const DynamicGridCycle cycle =
-        filter.update(PointCloudView::packedXyz(scan.xyz.data(), scan.xyz.size() / 3), scan.pose, stamp);
-    cpu_ms = threadCpuMs() - cpu_start;
-    process_cpu_ms = processCpuMs() - process_start;
-    stamp += kPeriod;
-    k = (k + 1) % kScans;
-    return cycle;
-  };
-  for (int warm = 0; warm < 10; ++warm)
-  {
-    next();
-  }
+  ScanFeeder feeder(config);
   std::vector<double> model_ms;
   std::vector<double> filter_ms;
   std::vector<double> total_ms;
@@ -168,22 +201,18 @@ double runCycles(benchmark::State& state, const DynamicGridConfig& config)
   std::size_t in_use = 0;
   for (auto _ : state)
   {
-    if (k == 0)
+    if (feeder.atEnd())
     {
       state.PauseTiming();
-      filter.reset();
-      for (int warm = 0; warm < 10; ++warm)
-      {
-        next();
-      }
+      feeder.restart();
       state.ResumeTiming();
     }
-    const DynamicGridCycle cycle = next();
+    const DynamicGridCycle cycle = feeder.next();
     model_ms.push_back(1e3 * cycle.sensor_model_seconds);
     filter_ms.push_back(1e3 * cycle.filter_seconds);
-    total_ms.push_back(1e3 * (cycle.sensor_model_seconds + cycle.filter_seconds));
-    total_cpu_ms.push_back(cpu_ms);
-    total_process_cpu_ms.push_back(process_cpu_ms);
+    total_ms.push_back(cycleMs(cycle));
+    total_cpu_ms.push_back(feeder.cpu_ms);
+    total_process_cpu_ms.push_back(feeder.process_cpu_ms);
     points = cycle.sensor.points;
     in_use = cycle.particles_in_use;
   }
@@ -197,6 +226,76 @@ double runCycles(benchmark::State& state, const DynamicGridConfig& config)
   state.counters["threads"] = config.threads;
   return median(total_ms);
 }
+
+// Median of the ratios (2-thread cycle / 1-thread cycle) of BM_CycleThreadRatio.
+double& interleavedRatio()
+{
+  static double ratio = 0.0;
+  return ratio;
+}
+
+// The thread target measured in turns: one iteration = 8 scans through a 1-thread filter, then
+// the same 8 scans through a 2-thread filter (which goes first alternates), each run preceded
+// by one untimed cycle that brings the filter's arrays back into the caches the other filter
+// used; the ratio of the two runs' medians per iteration. A host whose speed drifts during the
+// run (shared vCPUs: single runs of BM_CycleDefaults moved by 20 % from one minute to the next)
+// slows both alike. The two filters give the same output (determinism), so do the same work.
+// (Scan by scan in turns, each cycle found the other filter's data in the caches: the 1-thread
+// cycle took 18 instead of 12 ms.)
+void BM_CycleThreadRatio(benchmark::State& state)
+{
+  constexpr int kRun = 8;
+  DynamicGridConfig one;
+  one.threads = 1;
+  DynamicGridConfig two;
+  two.threads = 2;
+  ScanFeeder serial(one);
+  ScanFeeder parallel(two);
+  auto runMs = [](ScanFeeder& feeder)
+  {
+    if (feeder.atEnd())
+    {
+      feeder.restart();
+    }
+    feeder.next();
+    std::vector<double> ms;
+    for (int i = 0; i < kRun; ++i)
+    {
+      if (feeder.atEnd())
+      {
+        feeder.restart();
+      }
+      ms.push_back(cycleMs(feeder.next()));
+    }
+    return median(ms);
+  };
+  std::vector<double> serial_ms;
+  std::vector<double> parallel_ms;
+  std::vector<double> ratios;
+  for (auto _ : state)
+  {
+    double t1 = 0.0;
+    double t2 = 0.0;
+    if (ratios.size() % 2 == 0)
+    {
+      t1 = runMs(serial);
+      t2 = runMs(parallel);
+    }
+    else
+    {
+      t2 = runMs(parallel);
+      t1 = runMs(serial);
+    }
+    serial_ms.push_back(t1);
+    parallel_ms.push_back(t2);
+    ratios.push_back(t2 / t1);
+  }
+  state.counters["cycle_median_ms_1_thread"] = median(serial_ms);
+  state.counters["cycle_median_ms_2_threads"] = median(parallel_ms);
+  state.counters["ratio_median"] = median(ratios);
+  interleavedRatio() = median(ratios);
+}
+BENCHMARK(BM_CycleThreadRatio)->Unit(benchmark::kMillisecond)->Iterations(25);
 
 void BM_SensorModel(benchmark::State& state)
 {
@@ -279,6 +378,13 @@ int main(int argc, char** argv)
         "BM_CycleDefaults: cycle median %.2f ms on 1 thread, %.2f ms on 2 threads, ratio %.3f "
         "(target <= 0.6)\n",
         medians.at(1), medians.at(2), medians.at(2) / medians.at(1));
+  }
+  if (grid_vision_fusion::interleavedRatio() > 0.0)
+  {
+    std::printf(
+        "BM_CycleThreadRatio: 2 threads / 1 thread, runs of 8 scans in turns, median ratio %.3f "
+        "(target <= 0.6)\n",
+        grid_vision_fusion::interleavedRatio());
   }
   benchmark::Shutdown();
   return 0;
