@@ -56,6 +56,32 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
   return order;
 }
 
+/// Sets object.grid_vx, grid_vy and grid_velocity_agreement from the velocities of its cluster's cells.
+void gridVelocity(const ProjectedPointsView& points, FusedObject& object)
+{
+  if (object.cluster.empty())
+  {
+    return;
+  }
+  std::vector<double> vxs, vys;
+  vxs.reserve(object.cluster.size());
+  vys.reserve(object.cluster.size());
+  for (std::uint32_t i : object.cluster)
+  {
+    vxs.push_back(points.vx[i]);
+    vys.push_back(points.vy[i]);
+  }
+  object.grid_vx = median(vxs);
+  object.grid_vy = median(vys);
+  const double tolerance = std::max(0.5, 0.5 * std::hypot(object.grid_vx, object.grid_vy));
+  std::size_t agreeing = 0;
+  for (std::uint32_t i : object.cluster)
+  {
+    agreeing += std::hypot(points.vx[i] - object.grid_vx, points.vy[i] - object.grid_vy) <= tolerance ? 1 : 0;
+  }
+  object.grid_velocity_agreement = static_cast<double>(agreeing) / static_cast<double>(object.cluster.size());
+}
+
 FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& box,
                               const std::vector<std::size_t>& members, const ProjectedPointsView& points,
                               const FusionConfig& config)
@@ -76,12 +102,9 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
   object.median_y = median(ys);
   object.x = object.median_x;
   object.y = object.median_y;
-  std::vector<std::uint32_t> cluster;
-  if (config.motion_vote == MotionVote::kCluster)
-  {
-    cluster = objectCluster(points, object.members, box, config.centre.cluster_distance);
-  }
-  for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? cluster : object.members)
+  object.cluster = objectCluster(points, object.members, box, config.centre.cluster_distance);
+  gridVelocity(points, object);
+  for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? object.cluster : object.members)
   {
     if (points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic))
     {

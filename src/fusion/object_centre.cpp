@@ -283,8 +283,19 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
   {
     throw std::invalid_argument("estimateCentre: no points");
   }
+  return centreOfCluster(points, objectCluster(points, members, box, config.cluster_distance), camera_x,
+                         camera_y, footprint);
+}
+
+CentreEstimate centreOfCluster(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cluster,
+                               double camera_x, double camera_y, const Footprint* footprint)
+{
+  if (cluster.empty())
+  {
+    throw std::invalid_argument("centreOfCluster: no points");
+  }
   std::vector<double> cx, cy;
-  for (std::uint32_t i : objectCluster(points, members, box, config.cluster_distance))
+  for (std::uint32_t i : cluster)
   {
     cx.push_back(points.x[i]);
     cy.push_back(points.y[i]);
@@ -362,9 +373,12 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
     }
     const Detection& detection = detections[object.detection_index];
     const auto footprint = config.footprints.find(detection.label);
+    const Footprint* size = footprint == config.footprints.end() ? nullptr : &footprint->second;
+    // fuse() has found the object's cluster already (at the same cluster distance).
     const CentreEstimate centre =
-        estimateCentre(points, object.members, detection.box, camera_x, camera_y,
-                       footprint == config.footprints.end() ? nullptr : &footprint->second, config);
+        object.cluster.empty()
+            ? estimateCentre(points, object.members, detection.box, camera_x, camera_y, size, config)
+            : centreOfCluster(points, object.cluster, camera_x, camera_y, size);
     object.x = centre.x;
     object.y = centre.y;
   }

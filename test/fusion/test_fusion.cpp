@@ -35,6 +35,15 @@ void addDynamic(ProjectedPoints& pts, float u, float v, float x, float y, float 
 {
   pts.add(u, v, x, y, vx, vy, CellState::kDynamic);
 }
+
+// The paper's decision rule: every cell of the fusion band votes (the default votes with the
+// object's own cluster; both agree wherever the band holds only the object's cells).
+FusionConfig paperRule()
+{
+  FusionConfig config;
+  config.motion_vote = MotionVote::kRegion;
+  return config;
+}
 }  // namespace
 
 TEST(FusionRegion, BandLimitsFollowThePaper)
@@ -120,7 +129,7 @@ TEST(Median, OddAndEvenCounts)
 
 TEST(DecideMotion, LargerCardinalityTiesAndMinimum)
 {
-  FusionConfig config;
+  FusionConfig config = paperRule();
   EXPECT_EQ(decideMotion(3, 1, config), Motion::kStatic);
   EXPECT_EQ(decideMotion(1, 3, config), Motion::kDynamic);
   EXPECT_EQ(decideMotion(0, 0, config), Motion::kUnknown);
@@ -139,7 +148,7 @@ TEST(Fuse, EmptyRegionIsDiscarded)
   ProjectedPoints pts;
   addStatic(pts, 150.F, 120.F, 10.F, 0.F);  // inside the box, above the band
   addStatic(pts, 300.F, 180.F, 10.F, 0.F);  // right of the box
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   EXPECT_TRUE(result.objects.empty());
   EXPECT_EQ(result.invalid_points, 0U);
 }
@@ -156,7 +165,7 @@ TEST(Fuse, OnlyStaticPointsOddMedian)
   addStatic(pts, 120.F, 170.F, 10.F, 2.F);
   addStatic(pts, 150.F, 180.F, 12.F, 1.F);
   addStatic(pts, 180.F, 190.F, 11.F, 5.F);
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& o = result.objects[0];
   EXPECT_EQ(o.detection_index, 0U);
@@ -179,7 +188,7 @@ TEST(Fuse, DynamicMajorityEvenMedians)
   addStatic(pts, 140.F, 190.F, 30.F, 4.F);
   // Position over all 4 points: x sorted 20 21 22 30 → 21.5; y sorted 1 2 3 4 → 2.5.
   // Velocity over the 3 dynamic points: vx sorted 4 5 6 → 5; vy sorted 1 2 3 → 2.
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& o = result.objects[0];
   EXPECT_EQ(o.motion, Motion::kDynamic);
@@ -199,7 +208,7 @@ TEST(Fuse, EvenVelocityMedian)
   addDynamic(pts, 110.F, 170.F, 0.F, 0.F, 1.F, -1.F);
   addDynamic(pts, 120.F, 170.F, 0.F, 0.F, 3.F, -5.F);
   // vx (1 + 3)/2 = 2, vy (−1 − 5)/2 = −3
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
   EXPECT_DOUBLE_EQ(result.objects[0].vx, 2.0);
   EXPECT_DOUBLE_EQ(result.objects[0].vy, -3.0);
@@ -210,7 +219,7 @@ TEST(Fuse, TieFollowsTheRule)
   ProjectedPoints pts;
   addStatic(pts, 110.F, 170.F, 1.F, 1.F);
   addDynamic(pts, 120.F, 170.F, 3.F, 3.F, 2.F, 0.F);
-  FusionConfig config;
+  FusionConfig config = paperRule();
   EXPECT_EQ(fuse({kBox}, pts.view(), config).objects.at(0).motion, Motion::kStatic);
   config.tie_rule = TieRule::kDynamic;
   const FusedObject dynamic = fuse({kBox}, pts.view(), config).objects.at(0);
@@ -227,7 +236,7 @@ TEST(Fuse, MinimumPointCountGivesUnknown)
 {
   ProjectedPoints pts;
   addDynamic(pts, 110.F, 170.F, 5.F, 6.F, 2.F, 0.F);
-  FusionConfig config;
+  FusionConfig config = paperRule();
   config.min_points = 2;
   const FusionResult result = fuse({kBox}, pts.view(), config);
   ASSERT_EQ(result.objects.size(), 1U);
@@ -254,7 +263,7 @@ TEST(Fuse, HeadingInAllFourQuadrants)
   {
     ProjectedPoints pts;
     addDynamic(pts, 150.F, 180.F, 0.F, 0.F, c.vx, c.vy);
-    const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+    const FusionResult result = fuse({kBox}, pts.view(), paperRule());
     ASSERT_EQ(result.objects.size(), 1U);
     EXPECT_NEAR(result.objects[0].heading, c.heading, 1e-6) << "v = (" << c.vx << ", " << c.vy << ")";
   }
@@ -271,7 +280,7 @@ TEST(Fuse, OverlappingBoxesShareByDefault)
   addDynamic(pts, 230.F, 165.F, 25.F, 0.F, 3.F, 0.F);  // far band only
   addStatic(pts, 120.F, 190.F, 9.F, 1.F);              // near band only
 
-  const FusionResult shared = fuse({near_car, far_car}, pts.view(), FusionConfig{});
+  const FusionResult shared = fuse({near_car, far_car}, pts.view(), paperRule());
   ASSERT_EQ(shared.objects.size(), 2U);
   EXPECT_EQ(shared.objects[0].detection_index, 0U);
   EXPECT_EQ(shared.objects[0].static_points, 2U);
@@ -281,7 +290,7 @@ TEST(Fuse, OverlappingBoxesShareByDefault)
   EXPECT_EQ(shared.objects[1].dynamic_points, 1U);
 
   // Exclusive: the shared point belongs to the box whose bottom is lowest (near car, 180 > 170).
-  FusionConfig exclusive;
+  FusionConfig exclusive = paperRule();
   exclusive.exclusive_assignment = true;
   const FusionResult owned = fuse({far_car, near_car}, pts.view(), exclusive);
   ASSERT_EQ(owned.objects.size(), 2U);
@@ -298,7 +307,7 @@ TEST(Fuse, ExclusiveTieOnBottomGoesToHigherScore)
   const Detection high_score = makeDetection(120.F, 140.F, 220.F, 180.F, "van", 0.9F);
   ProjectedPoints pts;
   addStatic(pts, 150.F, 178.F, 1.F, 1.F);  // in both bands
-  FusionConfig config;
+  FusionConfig config = paperRule();
   config.exclusive_assignment = true;
   const FusionResult result = fuse({low_score, high_score}, pts.view(), config);
   ASSERT_EQ(result.objects.size(), 1U);
@@ -319,7 +328,7 @@ TEST(Fuse, NaNCoordinatesAreIgnored)
   {
     array->push_back(150.F);
   }
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   EXPECT_EQ(result.invalid_points, 6U);
   ASSERT_EQ(result.objects.size(), 1U);
   EXPECT_EQ(result.objects[0].static_points, 1U);
@@ -332,7 +341,7 @@ TEST(Fuse, StaticPointVelocityIsNotUsed)
 {
   ProjectedPoints pts;
   pts.add(150.F, 180.F, 1.F, 2.F, kNaN, kNaN, CellState::kStatic);  // velocity irrelevant
-  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   EXPECT_EQ(result.invalid_points, 0U);
   ASSERT_EQ(result.objects.size(), 1U);
   EXPECT_EQ(result.objects[0].motion, Motion::kStatic);
@@ -363,7 +372,7 @@ TEST(Fuse, ClusterVoteLeavesOutTheCellsAroundTheObject)
   {
     addStatic(pts, 120.F + 10.F * static_cast<float>(k), 161.F, 13.F, -1.F + 0.2F * static_cast<float>(k));
   }
-  FusionConfig config;
+  FusionConfig config = paperRule();
   const FusionResult region = fuse({kBox}, pts.view(), config);
   ASSERT_EQ(region.objects.size(), 1U);
   EXPECT_EQ(region.objects[0].motion, Motion::kStatic);
@@ -380,6 +389,34 @@ TEST(Fuse, ClusterVoteLeavesOutTheCellsAroundTheObject)
   // The position stays the region's median (the paper's): the 6th of the 11 x values sorted.
   EXPECT_FLOAT_EQ(o.median_x, 13.F);
   EXPECT_EQ(o.members.size(), 11U);
+}
+
+// The grid's velocity of an object comes from its own cluster, static cells included: 5 cells
+// of a slow car whose mass has turned static carry its particles' velocity (3.0–3.4 m/s along x),
+// one carries none; the wall behind it (another cluster) does not count.
+TEST(Fuse, GridVelocityIsTheMedianOfTheClustersCells)
+{
+  ProjectedPoints pts;
+  const float vx[] = {3.0F, 3.1F, 3.2F, 3.3F, 3.4F, 0.0F};
+  for (int k = 0; k < 6; ++k)
+  {
+    pts.add(140.F + 5.F * static_cast<float>(k), 178.F, 10.F + 0.1F * static_cast<float>(k), 0.2F, vx[k],
+            0.1F, k == 0 ? CellState::kDynamic : CellState::kStatic);
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    pts.add(120.F + 10.F * static_cast<float>(k), 161.F, 13.F, -1.F + 0.2F * static_cast<float>(k), -9.F, 0.F,
+            CellState::kStatic);
+  }
+  const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 1U);
+  const FusedObject& o = result.objects[0];
+  EXPECT_EQ(o.cluster.size(), 6U);
+  EXPECT_NEAR(o.grid_vx, 3.15, 1e-6);  // median of 0, 3.0, ..., 3.4
+  EXPECT_NEAR(o.grid_vy, 0.1, 1e-6);
+  // Within max(0.5, 3.15 / 2) m/s of it: the 5 moving cells, not the empty one.
+  EXPECT_NEAR(o.grid_velocity_agreement, 5.0 / 6.0, 1e-9);
+  EXPECT_EQ(o.motion, Motion::kStatic);  // the masses alone: 5 static cells against 1
 }
 
 TEST(CheckFusionInputs, AcceptsGoodAndNamesTheFault)

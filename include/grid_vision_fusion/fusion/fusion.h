@@ -69,8 +69,9 @@ struct FusionConfig
   bool exclusive_assignment = false;
   /// Which cells vote for the motion (and give the velocity). kCluster leaves out the cells of
   /// other objects that the band collects around a small one (walls, parked cars, the ground
-  /// beside a pedestrian); the cluster is formed at centre.cluster_distance.
-  MotionVote motion_vote = MotionVote::kRegion;
+  /// beside a pedestrian); the cluster is formed at centre.cluster_distance. kRegion is the
+  /// paper's rule (every cell of the band).
+  MotionVote motion_vote = MotionVote::kCluster;
   /// What the fusion stage reports as the position (fuse() itself always gives the median).
   PositionSource position = PositionSource::kCentre;
   /// The centre estimate (used with PositionSource::kCentre).
@@ -123,7 +124,17 @@ struct FusedObject
   double vx = 0.0;                   ///< median vx of the vote's dynamic points [m/s]; 0 unless kDynamic
   double vy = 0.0;                   ///< median vy of the vote's dynamic points [m/s]; 0 unless kDynamic
   double heading = 0.0;              ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+  /// The grid's velocity of the object: the component-wise median of the mean velocities of its
+  /// cluster's cells, static or dynamic alike [m/s] (0 without a cluster)...
+  double grid_vx = 0.0;
+  double grid_vy = 0.0;
+  /// ...and the share of those cells whose velocity lies within max(0.5 m/s, half its speed) of
+  /// it, in [0, 1]: the cells of a moving object agree on one velocity, a static object's few
+  /// particles scatter around zero.
+  double grid_velocity_agreement = 0.0;
   std::vector<std::uint32_t> members;  ///< indices of the region's valid points
+  /// The object's own cells among the members: objectCluster() at centre.cluster_distance.
+  std::vector<std::uint32_t> cluster;
 
   double speed() const;
 };
@@ -159,8 +170,9 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
                   const FusionConfig& config);
 
 /// Sets the position (x, y) of every object of `result` to its centre: estimateCentre() over its
-/// members, with the footprint of its detection's label (config.footprints), seen from the
-/// camera at (`camera_x`, `camera_y`) in the frame of the points [m]. median_x, median_y stay.
+/// members (centreOfCluster() of its cluster when fuse() has found one), with the footprint of its
+/// detection's label (config.footprints), seen from the camera at (`camera_x`, `camera_y`) in the frame of
+/// the points [m]. median_x, median_y stay.
 /// @throws std::invalid_argument when an object's detection_index or members do not fit
 ///         `detections` and `points`.
 void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,

@@ -96,4 +96,10 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
                               const BoundingBox& box, double camera_x, double camera_y,
                               const Footprint* footprint, const CentreConfig& config);
 
+/// Steps 3.–4. of estimateCentre() on the object's cells `cluster` (indices into `points`,
+/// non-empty), e.g. the cluster fuse() has found (FusedObject::cluster).
+/// @throws std::invalid_argument when `cluster` is empty.
+CentreEstimate centreOfCluster(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cluster,
+                               double camera_x, double camera_y, const Footprint* footprint);
+
 }  // namespace grid_vision_fusion
