@@ -22,6 +22,18 @@ void requirePositive(const char* name, double value)
     throw std::invalid_argument(msg.str());
   }
 }
+
+constexpr double kCos45 = 0.7071067811865476;
+
+void requireNonNegative(const char* name, double value)
+{
+  if (!std::isfinite(value) || value < 0.0)
+  {
+    std::ostringstream msg;
+    msg << name << " must be a finite value >= 0, got " << value;
+    throw std::invalid_argument(msg.str());
+  }
+}
 }  // namespace
 
 void TrackerConfig::validate() const
@@ -55,22 +67,21 @@ void TrackerConfig::validate() const
     throw std::invalid_argument("motion_switch_evidence must be in (0, motion_evidence_limit], got " +
                                 std::to_string(motion_switch_evidence));
   }
-  if (!std::isfinite(robust_sigma) || robust_sigma < 0.0)
-  {
-    throw std::invalid_argument("track_robust_sigma must be a finite value >= 0, got " +
-                                std::to_string(robust_sigma));
-  }
-  if (!std::isfinite(speed_evidence) || speed_evidence < 0.0)
-  {
-    throw std::invalid_argument("motion_speed_evidence must be a finite value >= 0, got " +
-                                std::to_string(speed_evidence));
-  }
+  requireNonNegative("track_robust_sigma", robust_sigma);
+  requireNonNegative("motion_speed_evidence", speed_evidence);
   requirePositive("motion_speed_threshold", motion_speed_threshold);
   requirePositive("motion_speed_window", motion_speed_window);
-  if (!std::isfinite(motion_min_dwell) || motion_min_dwell < 0.0)
+  requireNonNegative("motion_min_dwell", motion_min_dwell);
+  requireNonNegative("motion_grid_velocity_evidence", grid_velocity_evidence);
+  if (!(grid_velocity_agreement > 0.0 && grid_velocity_agreement <= 1.0))
   {
-    throw std::invalid_argument("motion_min_dwell must be a finite value >= 0, got " +
-                                std::to_string(motion_min_dwell));
+    throw std::invalid_argument("motion_grid_velocity_agreement must be in (0, 1], got " +
+                                std::to_string(grid_velocity_agreement));
+  }
+  if (grid_velocity_min_cells < 1)
+  {
+    throw std::invalid_argument("motion_grid_velocity_min_cells must be >= 1, got " +
+                                std::to_string(grid_velocity_min_cells));
   }
 }
 
@@ -174,6 +185,11 @@ void Tracker::restart(Track& track, const TrackObservation& observation) const
   track.state << observation.x, observation.y, observation.has_velocity ? observation.vx : 0.0,
       observation.has_velocity ? observation.vy : 0.0;
   track.covariance = Eigen::Vector4d(rp, rp, vs * vs, vs * vs).asDiagonal();
+  track.restarted = !track.history.empty();  // a jump, not a new track
+  if (track.restarted)
+  {
+    track.before_jump = track.history.back().observed;
+  }
   track.history.clear();  // the displacement before a jump says nothing about the speed
 }
 
@@ -260,10 +276,15 @@ double Tracker::progressiveSpeed(const Track& track) const
     return 0.0;
   }
   const Eigen::Vector2d displacement = track.history[last].observed - track.history[middle].observed;
+  if (displacement.isZero(1e-6))
+  {
+    return 0.0;
+  }
   for (std::size_t i = middle + 1; i <= last; ++i)
   {
+    // A step of zero is allowed: an object slower than a cell per image stays in its cell.
     const Eigen::Vector2d step = track.history[i].observed - track.history[i - 1].observed;
-    if (step.dot(displacement) <= 0.0 || step.norm() > 0.5 * displacement.norm())
+    if ((!step.isZero(1e-6) && step.dot(displacement) <= 0.0) || step.norm() > 0.5 * displacement.norm())
     {
       return 0.0;
     }
@@ -272,8 +293,40 @@ double Tracker::progressiveSpeed(const Track& track) const
          (track.history[last].stamp - track.history[middle].stamp);
 }
 
+bool Tracker::returningAfterJump(const Track& track) const
+{
+  if (!track.restarted ||
+      track.history.back().stamp - track.restart_stamp > config_.motion_speed_window + 1e-9)
+  {
+    return false;
+  }
+  const Eigen::Vector2d moved = track.history.back().observed - track.history.front().observed;
+  const Eigen::Vector2d back = track.before_jump - track.history.front().observed;
+  return moved.dot(back) > kCos45 * moved.norm() * back.norm();
+}
+
+bool Tracker::gridVelocityAgrees(const Track& track, const TrackObservation& observation) const
+{
+  const Eigen::Vector2d grid(observation.grid_vx, observation.grid_vy);
+  if (track.history.size() < 3 || !(grid.norm() > config_.motion_speed_threshold) ||
+      observation.grid_cells < static_cast<std::uint32_t>(config_.grid_velocity_min_cells) ||
+      observation.grid_velocity_agreement < config_.grid_velocity_agreement)
+  {
+    return false;
+  }
+  const Sample& oldest = track.history.front();
+  const Sample& newest = track.history.back();
+  const Eigen::Vector2d moved = (newest.observed - oldest.observed) / (newest.stamp - oldest.stamp);
+  return moved.norm() > 0.5 * config_.motion_speed_threshold &&
+         moved.dot(grid) > kCos45 * moved.norm() * grid.norm();
+}
+
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
+  if (track.restarted && track.history.empty())
+  {
+    track.restart_stamp = stamp_s;
+  }
   track.history.push_back({stamp_s, track.state.head<2>(), Eigen::Vector2d(observation.x, observation.y)});
   while (stamp_s - track.history.front().stamp > config_.motion_speed_window + 1e-9)
   {
@@ -289,8 +342,10 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
   {
     const double filter_speed = track.state.tail<2>().norm();
     const double window_speed = windowSpeed(track);
-    if (std::min(filter_speed, std::max(sustainedSpeed(track), progressiveSpeed(track))) >
-        config_.motion_speed_threshold)
+    // The progressive speed alone: the filter's speed lags a start from rest.
+    const double moving_speed =
+        std::max(std::min(filter_speed, sustainedSpeed(track)), progressiveSpeed(track));
+    if (moving_speed > config_.motion_speed_threshold && !returningAfterJump(track))
     {
       evidence += config_.speed_evidence;
     }
@@ -298,6 +353,10 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
     {
       evidence -= config_.speed_evidence;
     }
+  }
+  if (config_.grid_velocity_evidence > 0.0 && gridVelocityAgrees(track, observation))
+  {
+    evidence += config_.grid_velocity_evidence;
   }
   track.motion_score = std::clamp(track.motion_score + evidence, -config_.motion_evidence_limit,
                                   config_.motion_evidence_limit);
@@ -467,6 +526,10 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     o.static_points = object.static_points;
     o.dynamic_points = object.dynamic_points;
     o.motion = object.motion;
+    o.grid_vx = object.grid_vx;
+    o.grid_vy = object.grid_vy;
+    o.grid_velocity_agreement = object.grid_velocity_agreement;
+    o.grid_cells = static_cast<std::uint32_t>(object.cluster.size());
     observations.push_back(std::move(o));
   }
   const std::vector<TrackEstimate> estimates = tracker.update(stamp_s, observations);

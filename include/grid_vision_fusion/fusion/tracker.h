@@ -54,7 +54,7 @@ struct TrackerConfig
   /// +motion_switch_evidence and static when it reaches −motion_switch_evidence; in between it
   /// keeps the last verdict (hysteresis). Until its score first reaches a threshold, a new track
   /// takes the verdict of each image's region (the per-frame output's).
-  double motion_evidence_limit = 3.0;   ///< > 0
+  double motion_evidence_limit = 2.0;   ///< > 0
   double motion_switch_evidence = 1.5;  ///< in (0, motion_evidence_limit]
   /// After a change (of either kind), the verdict holds for at least this long [s], >= 0: no
   /// flicker faster — unless the score reaches the opposite limit (±motion_evidence_limit), so
@@ -65,17 +65,30 @@ struct TrackerConfig
   /// when both the filter's speed and the sustained speed (the smaller of the average speeds of
   /// the observed position over the two halves of the last motion_speed_window, 0 when their
   /// directions differ by more than 90°: a jump of the centre estimate falls into one half only)
-  /// or the progressive speed (the second half's alone, when its observed positions step
-  /// steadily forward: a start from rest) exceed motion_speed_threshold, −weight when both the
-  /// filter's speed and the average speed of the filtered position over the window are below
-  /// half of it. Needs a track older than half the window. Above 1 it outweighs a region vote
-  /// that leans static: the grid does not resolve motion slower than about a cell per scan,
-  /// whose cells stay occupied and turn static.
-  double speed_evidence = 1.5;
+  /// exceed motion_speed_threshold, or the progressive speed does (the second half's alone, when
+  /// its observed positions never step back and none by more than half of the way: a start from
+  /// rest, which the filter's speed lags), −weight when both the filter's speed and the average
+  /// speed of the filtered position over the window are below half of it. Needs a track older
+  /// than half the window; no +weight while the observed position, after a restart (a jump of
+  /// the centre estimate), heads back to where it was before the jump: the estimate recovering,
+  /// not the object moving. Above 1 it outweighs a region vote that leans static: the grid does
+  /// not resolve motion slower than about a cell per scan, whose cells stay occupied and turn
+  /// static.
+  double speed_evidence = 2.0;
   /// [m/s], > 0. Below the 1 m/s that counts as moving: the sustained speed, a minimum of two
   /// noisy averages, reads low.
   double motion_speed_threshold = 0.8;
   double motion_speed_window = 1.0;  ///< [s], > 0
+  /// Weight of the grid's velocity as evidence, >= 0 (0: off): +weight per image when the
+  /// object's cells agree on one velocity (grid_velocity_agreement of at least
+  /// grid_velocity_min_cells cells, FusedObject) faster than motion_speed_threshold and the
+  /// track's observed position has moved the same way (within 45°, at least half the threshold,
+  /// over at least 3 images). The particles of a moving object's cells carry its velocity a few
+  /// scans after it appears, while its mass is still split between static and dynamic (a new
+  /// track, the first second of a drive, the long side of a vehicle).
+  double grid_velocity_evidence = 2.5;
+  double grid_velocity_agreement = 0.5;  ///< share of the cells, (0, 1]
+  int grid_velocity_min_cells = 4;       ///< >= 1
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
   void validate() const;
@@ -94,6 +107,10 @@ struct TrackObservation
   std::uint32_t static_points = 0;   ///< static cells of the region
   std::uint32_t dynamic_points = 0;  ///< dynamic cells of the region
   Motion motion = Motion::kUnknown;  ///< the region's own verdict (the paper's)
+  double grid_vx = 0.0;              ///< the grid's velocity of the object [m/s] (FusedObject::grid_vx)
+  double grid_vy = 0.0;
+  double grid_velocity_agreement = 0.0;  ///< share of its cells that agree on it, [0, 1]
+  std::uint32_t grid_cells = 0;          ///< cells of the object's cluster
 };
 
 /// What the tracker says about one observation of the image.
@@ -164,6 +181,9 @@ private:
     double last_motion_change = 0.0;  ///< stamp of the last verdict change [s]
     /// The images of the last motion_speed_window, oldest first.
     std::deque<Sample> history;
+    bool restarted = false;      ///< restarted after a jump of the centre estimate...
+    double restart_stamp = 0.0;  ///< ...at this stamp [s]...
+    Eigen::Vector2d before_jump = Eigen::Vector2d::Zero();  ///< ...from this observed position
   };
 
   void predict(Track& track, double dt) const;
@@ -186,10 +206,16 @@ private:
   double sustainedSpeed(const Track& track) const;
   /// A start from rest, which the sustained speed sees only half a window later: the average
   /// speed of the filtered position over the second half of the history when the observed
-  /// positions of that half step forward along their displacement every time (at least 3
-  /// steps), none by more than half of it (a jump of the centre estimate is one big step, and
-  /// noise around a standing object steps back and forth); 0 otherwise.
+  /// positions of that half have moved and never step back along their displacement (at least 3
+  /// steps; a step of zero is a slow object within its cell), none by more than half of it (a
+  /// jump of the centre estimate is one big step, and noise around a standing object steps back
+  /// and forth); 0 otherwise.
   double progressiveSpeed(const Track& track) const;
+  /// The observed position has been heading back to where it was before the track's last
+  /// restart, within motion_speed_window of it.
+  bool returningAfterJump(const Track& track) const;
+  /// The grid's velocity evidence of grid_velocity_evidence holds for this observation.
+  bool gridVelocityAgrees(const Track& track, const TrackObservation& observation) const;
   /// Index in the history of the entry nearest to the middle of its span.
   std::size_t middleIndex(const Track& track) const;
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;

@@ -261,6 +261,9 @@ void visitParams(FusionParams& p, Visitor& v)
   v("motion_speed_evidence", t.speed_evidence);
   v("motion_speed_threshold", t.motion_speed_threshold);
   v("motion_speed_window", t.motion_speed_window);
+  v("motion_grid_velocity_evidence", t.grid_velocity_evidence);
+  v("motion_grid_velocity_agreement", t.grid_velocity_agreement);
+  v("motion_grid_velocity_min_cells", t.grid_velocity_min_cells);
 }
 
 /// The values of the table `params` by parameter name (the defaults for a default-constructed one).
