@@ -19,7 +19,7 @@
 #   --config-dir DIR      the nodes' parameter files for run_pipeline (default: the package's
 #                         config/), to score a tuned configuration
 #   --param NODE/KEY=V    one parameter for run_pipeline on top of the files (its --param),
-#                         e.g. --param fusion/motion_vote=region; repeatable
+#                         e.g. --param fusion/motion_vote=cluster; repeatable
 #   --reuse DIR           score again the drives and bags that an earlier --keep run left in
 #                         DIR/work/ (no make_synthetic_drive, no kitti_to_bag): a tuning loop in
 #                         a fraction of the time; DIR must not be the --output folder

@@ -36,8 +36,8 @@ void addDynamic(ProjectedPoints& pts, float u, float v, float x, float y, float 
   pts.add(u, v, x, y, vx, vy, CellState::kDynamic);
 }
 
-// The paper's decision rule: every cell of the fusion band votes (the default votes with the
-// object's own cluster; both agree wherever the band holds only the object's cells).
+// The paper's decision rule, the default: every cell of the fusion band votes (stated, as these
+// tests check that rule whatever the default).
 FusionConfig paperRule()
 {
   FusionConfig config;

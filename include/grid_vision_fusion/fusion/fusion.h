@@ -69,9 +69,9 @@ struct FusionConfig
   bool exclusive_assignment = false;
   /// Which cells vote for the motion (and give the velocity). kCluster leaves out the cells of
   /// other objects that the band collects around a small one (walls, parked cars, the ground
-  /// beside a pedestrian); the cluster is formed at centre.cluster_distance. kRegion is the
-  /// paper's rule (every cell of the band).
-  MotionVote motion_vote = MotionVote::kCluster;
+  /// beside a pedestrian); the cluster is formed at centre.cluster_distance. kRegion (the
+  /// default) is the paper's rule: every cell of the band.
+  MotionVote motion_vote = MotionVote::kRegion;
   /// What the fusion stage reports as the position (fuse() itself always gives the median).
   PositionSource position = PositionSource::kCentre;
   /// The centre estimate (used with PositionSource::kCentre).
