@@ -524,6 +524,11 @@ TEST(Tracker, ConfigValidation)
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion_speed_window = 0.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion_min_dwell = -1.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.robust_sigma = -0.5; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.grid_velocity_evidence = -1.0; })),
+               std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.grid_velocity_agreement = 0.0; })),
+               std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.grid_velocity_min_cells = 0; })), std::invalid_argument);
   Tracker tracker;
   EXPECT_THROW(tracker.setConfig(bad([](TrackerConfig& c) { c.max_gap = 0.0; })), std::invalid_argument);
   EXPECT_DOUBLE_EQ(tracker.config().max_gap, TrackerConfig{}.max_gap);
