@@ -23,7 +23,12 @@ void requirePositive(const char* name, double value)
   }
 }
 
-constexpr double kCos45 = 0.7071067811865476;
+/// a and b point within 45° of each other (false when either is zero).
+bool within45Degrees(const Eigen::Vector2d& a, const Eigen::Vector2d& b)
+{
+  constexpr double kCos45 = 0.7071067811865476;
+  return a.dot(b) > kCos45 * a.norm() * b.norm();
+}
 
 void requireNonNegative(const char* name, double value)
 {
@@ -178,7 +183,7 @@ double Tracker::positionDistance2(const Track& track, const TrackObservation& ob
   return innovation.dot(s.inverse() * innovation);
 }
 
-void Tracker::restart(Track& track, const TrackObservation& observation) const
+void Tracker::restart(Track& track, const TrackObservation& observation, double stamp_s) const
 {
   const double rp = config_.position_sigma * config_.position_sigma;
   const double vs = observation.has_velocity ? config_.velocity_sigma : config_.initial_speed_sigma;
@@ -188,6 +193,7 @@ void Tracker::restart(Track& track, const TrackObservation& observation) const
   track.restarted = !track.history.empty();  // a jump, not a new track
   if (track.restarted)
   {
+    track.restart_stamp = stamp_s;
     track.before_jump = track.history.back().observed;
   }
   track.history.clear();  // the displacement before a jump says nothing about the speed
@@ -302,7 +308,7 @@ bool Tracker::returningAfterJump(const Track& track) const
   }
   const Eigen::Vector2d moved = track.history.back().observed - track.history.front().observed;
   const Eigen::Vector2d back = track.before_jump - track.history.front().observed;
-  return moved.dot(back) > kCos45 * moved.norm() * back.norm();
+  return within45Degrees(moved, back);
 }
 
 bool Tracker::gridVelocityAgrees(const Track& track, const TrackObservation& observation) const
@@ -317,16 +323,11 @@ bool Tracker::gridVelocityAgrees(const Track& track, const TrackObservation& obs
   const Sample& oldest = track.history.front();
   const Sample& newest = track.history.back();
   const Eigen::Vector2d moved = (newest.observed - oldest.observed) / (newest.stamp - oldest.stamp);
-  return moved.norm() > 0.5 * config_.motion_speed_threshold &&
-         moved.dot(grid) > kCos45 * moved.norm() * grid.norm();
+  return moved.norm() > 0.5 * config_.motion_speed_threshold && within45Degrees(moved, grid);
 }
 
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
-  if (track.restarted && track.history.empty())
-  {
-    track.restart_stamp = stamp_s;
-  }
   track.history.push_back({stamp_s, track.state.head<2>(), Eigen::Vector2d(observation.x, observation.y)});
   while (stamp_s - track.history.front().stamp > config_.motion_speed_window + 1e-9)
   {
@@ -465,7 +466,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
     {
       // Admitted by its box alone: the position jumped (the estimate of a partly hidden object, or
       // another object's cells). Restart the state there rather than bend the velocity to it.
-      restart(track, obs);
+      restart(track, obs, stamp_s);
     }
     updateMotion(track, obs, stamp_s);
     track.box = obs.box;
@@ -484,7 +485,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
     Track track;
     track.id = next_id_++;
     track.label = obs.label;
-    restart(track, obs);
+    restart(track, obs, stamp_s);
     track.box = obs.box;
     track.hits = 1;
     track.confirmed = config_.min_hits <= 1;

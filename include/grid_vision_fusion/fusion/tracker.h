@@ -191,8 +191,9 @@ private:
   /// Squared Mahalanobis distance of the observation's position from the track's prediction.
   double positionDistance2(const Track& track, const TrackObservation& observation) const;
   /// Sets the state to the observation (position, the grid's velocity or zero) with the initial
-  /// uncertainty: a new track, or a track whose object was admitted by its box overlap alone.
-  void restart(Track& track, const TrackObservation& observation) const;
+  /// uncertainty: a new track, or a track whose object was admitted by its box overlap alone (a
+  /// jump at `stamp_s`, remembered for returningAfterJump()).
+  void restart(Track& track, const TrackObservation& observation, double stamp_s) const;
   void updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const;
   double speedSigma(const Track& track) const;
   /// The track's history spans at least half of motion_speed_window: its speeds count.
