@@ -23,6 +23,11 @@ void requirePositive(const char* name, double value)
   }
 }
 
+/// Cells of the object's cluster that each image of a young track needs for its early
+/// displacement to count: the centre estimated from fewer (a corner of a car coming into view)
+/// moves as more of the object shows, not with the object.
+constexpr std::uint32_t kEarlyMinCells = 3;
+
 /// a and b point within 45° of each other (false when either is zero).
 bool within45Degrees(const Eigen::Vector2d& a, const Eigen::Vector2d& b)
 {
@@ -78,6 +83,13 @@ void TrackerConfig::validate() const
   requirePositive("motion_speed_window", motion_speed_window);
   requireNonNegative("motion_min_dwell", motion_min_dwell);
   requireNonNegative("motion_grid_velocity_evidence", grid_velocity_evidence);
+  requireNonNegative("motion_early_displacement", early_displacement);
+  requireNonNegative("motion_step_tolerance", step_tolerance);
+  if (!(still_window >= 0.0 && still_window <= motion_speed_window))
+  {
+    throw std::invalid_argument("motion_still_window must be in [0, motion_speed_window], got " +
+                                std::to_string(still_window));
+  }
   if (!(grid_velocity_agreement > 0.0 && grid_velocity_agreement <= 1.0))
   {
     throw std::invalid_argument("motion_grid_velocity_agreement must be in (0, 1], got " +
@@ -190,6 +202,7 @@ void Tracker::restart(Track& track, const TrackObservation& observation, double 
   track.state << observation.x, observation.y, observation.has_velocity ? observation.vx : 0.0,
       observation.has_velocity ? observation.vy : 0.0;
   track.covariance = Eigen::Vector4d(rp, rp, vs * vs, vs * vs).asDiagonal();
+  track.history_start = stamp_s;
   track.restarted = !track.history.empty();  // a jump, not a new track
   if (track.restarted)
   {
@@ -269,6 +282,28 @@ double Tracker::sustainedSpeed(const Track& track) const
   return std::min(first.norm() / first_span, second.norm() / second_span);
 }
 
+double Tracker::steadyDisplacement(const Track& track, std::size_t first, double max_share) const
+{
+  const std::size_t last = track.history.size() - 1;
+  const Eigen::Vector2d displacement = track.history[last].observed - track.history[first].observed;
+  const double length = displacement.norm();
+  if (!(length > config_.step_tolerance))
+  {
+    return 0.0;
+  }
+  for (std::size_t i = first + 1; i <= last; ++i)
+  {
+    const Eigen::Vector2d step = track.history[i].observed - track.history[i - 1].observed;
+    const double step_length = step.norm();
+    if ((step_length > config_.step_tolerance && step.dot(displacement) <= 0.0) ||
+        step_length > max_share * length)
+    {
+      return 0.0;
+    }
+  }
+  return length;
+}
+
 double Tracker::progressiveSpeed(const Track& track) const
 {
   if (!windowFilled(track))
@@ -281,22 +316,45 @@ double Tracker::progressiveSpeed(const Track& track) const
   {
     return 0.0;
   }
-  const Eigen::Vector2d displacement = track.history[last].observed - track.history[middle].observed;
-  if (displacement.isZero(1e-6))
+  return steadyDisplacement(track, middle, 0.5) / (track.history[last].stamp - track.history[middle].stamp);
+}
+
+double Tracker::earlySpeed(const Track& track) const
+{
+  if (!(config_.early_displacement > 0.0) || windowFilled(track) || track.history.size() < 3)
   {
     return 0.0;
   }
-  for (std::size_t i = middle + 1; i <= last; ++i)
+  for (const Sample& sample : track.history)
   {
-    // A step of zero is allowed: an object slower than a cell per image stays in its cell.
-    const Eigen::Vector2d step = track.history[i].observed - track.history[i - 1].observed;
-    if ((!step.isZero(1e-6) && step.dot(displacement) <= 0.0) || step.norm() > 0.5 * displacement.norm())
+    if (sample.cells < kEarlyMinCells)
     {
-      return 0.0;
+      return 0.0;  // a corner or a speck: its centre estimate moves as more of the object shows
     }
   }
-  return (track.history[last].filtered - track.history[middle].filtered).norm() /
-         (track.history[last].stamp - track.history[middle].stamp);
+  const double moved = steadyDisplacement(track, 0, 0.75);
+  if (moved < config_.early_displacement)
+  {
+    return 0.0;
+  }
+  return moved / (track.history.back().stamp - track.history.front().stamp);
+}
+
+bool Tracker::stillRecently(const Track& track) const
+{
+  const Sample& newest = track.history.back();
+  if (!(config_.still_window > 0.0) ||
+      newest.stamp - track.history.front().stamp < config_.still_window - 1e-6)
+  {
+    return false;
+  }
+  double farthest = 0.0;
+  for (auto it = track.history.rbegin();
+       it != track.history.rend() && newest.stamp - it->stamp <= config_.still_window + 1e-6; ++it)
+  {
+    farthest = std::max(farthest, (it->observed - newest.observed).norm());
+  }
+  return farthest <= 0.5 * config_.motion_speed_threshold * config_.still_window;
 }
 
 bool Tracker::returningAfterJump(const Track& track) const
@@ -328,7 +386,8 @@ bool Tracker::gridVelocityAgrees(const Track& track, const TrackObservation& obs
 
 void Tracker::updateMotion(Track& track, const TrackObservation& observation, double stamp_s) const
 {
-  track.history.push_back({stamp_s, track.state.head<2>(), Eigen::Vector2d(observation.x, observation.y)});
+  track.history.push_back({stamp_s, track.state.head<2>(), Eigen::Vector2d(observation.x, observation.y),
+                           observation.grid_cells});
   while (stamp_s - track.history.front().stamp > config_.motion_speed_window + 1e-9)
   {
     track.history.pop_front();
@@ -348,12 +407,23 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
         std::max(std::min(filter_speed, sustainedSpeed(track)), progressiveSpeed(track));
     if (moving_speed > config_.motion_speed_threshold && !returningAfterJump(track))
     {
+      if (config_.speed_overrides_region &&
+          stamp_s - track.history_start >= config_.motion_speed_window - 1e-6)
+      {
+        evidence = std::max(evidence, 0.0);
+      }
       evidence += config_.speed_evidence;
     }
-    else if (std::max(filter_speed, window_speed) < 0.5 * config_.motion_speed_threshold)
+    else if (std::max(filter_speed, window_speed) < 0.5 * config_.motion_speed_threshold ||
+             stillRecently(track))
     {
       evidence -= config_.speed_evidence;
     }
+  }
+  else if (config_.speed_evidence > 0.0 && earlySpeed(track) > config_.motion_speed_threshold &&
+           !returningAfterJump(track))
+  {
+    evidence += config_.speed_evidence;
   }
   if (config_.grid_velocity_evidence > 0.0 && gridVelocityAgrees(track, observation))
   {

@@ -26,6 +26,7 @@ TrackObservation observe(const std::string& label, double x, double y, float u,
   o.motion = motion;
   o.static_points = motion == Motion::kDynamic ? 0 : 10;
   o.dynamic_points = motion == Motion::kDynamic ? 10 : 0;
+  o.grid_cells = 10;  // the object's cluster; its cells carry no velocity
   return o;
 }
 
@@ -187,12 +188,13 @@ TrackObservation undecided(double x, double y)
 TEST(Tracker, AStartFromRestCountsBeforeTheSustainedSpeedDoes)
 {
   // Standing for 3 s (score −3), then rolling off at 2 m/s while the grid's regions stay split
-  // evenly. At image 4 (0.4 s) the second half of the history steps forward steadily and its
-  // speed passes 1 m/s: +1.5 per image, without waiting for the filter's speed, which lags:
-  // dynamic after 3 images (−3 → +1.5), 0.6 s after the start. (Before the progressive speed
-  // counted alone: 0.8 s. The sustained speed needs its first half to move as well: later still.
-  // A window of 1 s, a threshold of 1 m/s, limit 3 and weight 1.5, set here, keep these times
-  // whatever the defaults.)
+  // evenly. At image 2 (0.2 s) the second half of the history has moved 0.6 m steadily: its
+  // observed speed passes 1 m/s, +1.5 per image, without waiting for the filter's speed, which
+  // lags: dynamic after 3 images (−3 → +1.5), at image 4, 0.4 s after the start. (With the
+  // filtered positions the progressive speed lagged as well: 0.6 s. Before it counted alone:
+  // 0.8 s. The sustained speed needs its first half to move as well: later still. A window of
+  // 1 s, a threshold of 1 m/s, limit 3 and weight 1.5, set here, keep these times whatever the
+  // defaults.)
   TrackerConfig config;
   config.motion_speed_window = 1.0;
   config.motion_speed_threshold = 1.0;
@@ -209,7 +211,7 @@ TEST(Tracker, AStartFromRestCountsBeforeTheSustainedSpeedDoes)
   {
     const double x = 12.0 + 0.2 * (k - start + 1);
     const Motion motion = tracker.update(k * kFramePeriodS, {undecided(x, 3.0)})[0].motion;
-    EXPECT_EQ(motion, k < start + 6 ? Motion::kStatic : Motion::kDynamic) << "image " << k - start;
+    EXPECT_EQ(motion, k < start + 4 ? Motion::kStatic : Motion::kDynamic) << "image " << k - start;
   }
 }
 
@@ -218,8 +220,9 @@ TEST(Tracker, ASlowStartWithinItsCellsCountsProgressively)
   // A pedestrian standing for 3 s, then walking off at 1.2 m/s; its centre estimate moves in
   // whole cells of 0.2 m (steps of 0 or 0.2 m) and the grid calls its regions static (-1 per
   // image). The steps of zero are the object within its cell, not a step back: the progressive
-  // speed passes and the verdict turns dynamic 0.9 s after the start (when a step of zero broke
-  // the progression: only through the sustained speed, 1.2 s after).
+  // speed passes, the old track's static votes no longer count against it, and the verdict
+  // turns dynamic 0.5 s after the start (with the filtered positions and the votes: 0.9 s; when a
+  // step of zero broke the progression, only through the sustained speed: 1.2 s).
   Tracker tracker;
   int k = 0;
   for (; k < 30; ++k)
@@ -232,7 +235,7 @@ TEST(Tracker, ASlowStartWithinItsCellsCountsProgressively)
     const double walked = 1.2 * (k - start + 1) * kFramePeriodS;
     const double x = 12.0 + 0.2 * std::floor(walked / 0.2);
     const Motion motion = tracker.update(k * kFramePeriodS, {observe("pedestrian", x, 3.0, 400.F)})[0].motion;
-    EXPECT_EQ(motion, k < start + 9 ? Motion::kStatic : Motion::kDynamic) << "image " << k - start;
+    EXPECT_EQ(motion, k < start + 5 ? Motion::kStatic : Motion::kDynamic) << "image " << k - start;
   }
 }
 
@@ -282,6 +285,7 @@ TEST(Tracker, TheGridsVelocityFindsANewMoverSooner)
   {
     TrackerConfig config;
     config.grid_velocity_evidence = grid_evidence;
+    config.early_displacement = 0.0;  // this test is about the grid's velocity alone
     Tracker tracker(config);
     for (int k = 0; k < 15; ++k)
     {
@@ -312,6 +316,153 @@ TEST(Tracker, AGridVelocityWithoutDisplacementIsNoEvidence)
     o.dynamic_points = 0;
     EXPECT_EQ(tracker.update(k * kFramePeriodS, {o})[0].motion, Motion::kStatic) << "image " << k;
   }
+}
+
+TEST(Tracker, AFastNewTrackCountsItsEarlyDisplacement)
+{
+  // A new track of a car at 10 m/s along x whose regions the grid splits evenly (the first
+  // scans of a drive: no cell has a history yet). Its observed position has moved 2 m over 2
+  // steady steps at the third image: +2 there, dynamic (0.2 s). Without the early test the speed
+  // tests wait for half a window (image 5); so they do for an object seen as 2 cells (a corner
+  // coming into view, whose centre estimate moves as more of it shows).
+  auto dynamicFrom = [](double early_displacement, std::uint32_t cells)
+  {
+    TrackerConfig config;
+    config.early_displacement = early_displacement;
+    Tracker tracker(config);
+    for (int k = 0; k < 15; ++k)
+    {
+      const double t = k * kFramePeriodS;
+      TrackObservation o = undecided(10.0 + 10.0 * t, 3.0);
+      o.grid_cells = cells;
+      if (tracker.update(t, {o})[0].motion == Motion::kDynamic)
+      {
+        return k;
+      }
+    }
+    return -1;
+  };
+  EXPECT_EQ(dynamicFrom(TrackerConfig{}.early_displacement, 10), 2);
+  EXPECT_EQ(dynamicFrom(0.0, 10), 5);
+  EXPECT_EQ(dynamicFrom(TrackerConfig{}.early_displacement, 2), 5);
+}
+
+TEST(Tracker, AnEarlyJumpOfTheCentreEstimateIsNoEarlyDisplacement)
+{
+  // A parked car whose first centre estimate lies 1.5 m off (a part of it seen) and then stays
+  // put: one step carries the whole displacement, not a steady one, so the early test gives
+  // nothing; its regions lean static and the verdict stays static.
+  Tracker tracker;
+  for (int k = 0; k < 10; ++k)
+  {
+    TrackObservation o = observe("car", k == 0 ? 13.5 : 12.0, 3.0, 400.F);
+    o.static_points = 6;
+    o.dynamic_points = 4;
+    EXPECT_EQ(tracker.update(k * kFramePeriodS, {o})[0].motion, Motion::kStatic) << "image " << k;
+  }
+}
+
+TEST(Tracker, AStopIsSeenOnceThePositionStandsStill)
+{
+  // A car driving at 3 m/s for 3 s (dynamic), then stopping dead, its regions split evenly
+  // throughout. Its observed position stands still from the stop on: after half a second
+  // (still_window) each image gives −2 and the verdict turns static 0.6 s after the stop. The
+  // filter's speed and the average over the window decay later: without the still test, the
+  // verdict turns static a second after the stop.
+  auto staticAfter = [](double still_window)
+  {
+    TrackerConfig config;
+    config.still_window = still_window;
+    Tracker tracker(config);
+    int k = 0;
+    for (; k < 30; ++k)
+    {
+      tracker.update(k * kFramePeriodS, {undecided(10.0 + 0.3 * k, 3.0)});
+    }
+    const int stop = k;
+    for (; k < stop + 30; ++k)
+    {
+      if (tracker.update(k * kFramePeriodS, {undecided(10.0 + 0.3 * stop, 3.0)})[0].motion == Motion::kStatic)
+      {
+        return k - stop;
+      }
+    }
+    return -1;
+  };
+  EXPECT_EQ(staticAfter(TrackerConfig{}.still_window), 6);
+  EXPECT_GE(staticAfter(0.0), 10);
+}
+
+TEST(Tracker, AMeasuredSpeedOverridesTheStaticVoteOfAnOldTrackOnly)
+{
+  // A pedestrian standing for 3 s, then walking off at 1.2 m/s; the grid calls its regions
+  // static (−1 per image) throughout, as it does for motion slower than a cell per scan. Once
+  // the track's own speed passes the threshold, the static vote of an old track no longer
+  // counts against it: dynamic sooner than with the vote. A track that is born walking keeps
+  // the vote in its first second (its displacement may still be its centre estimate settling):
+  // there the override changes nothing.
+  auto dynamicAfter = [](bool overrides, int standing_images)
+  {
+    TrackerConfig config;
+    config.speed_overrides_region = overrides;
+    Tracker tracker(config);
+    int k = 0;
+    for (; k < standing_images; ++k)
+    {
+      tracker.update(k * kFramePeriodS, {observe("pedestrian", 12.0, 3.0, 400.F)});
+    }
+    const int start = k;
+    for (; k <= start + 30; ++k)
+    {
+      const double x = 12.0 + 1.2 * (k - start + 1) * kFramePeriodS;
+      if (tracker.update(k * kFramePeriodS, {observe("pedestrian", x, 3.0, 400.F)})[0].motion ==
+          Motion::kDynamic)
+      {
+        return k - start;
+      }
+    }
+    return -1;
+  };
+  const int with_override = dynamicAfter(true, 30);
+  const int without = dynamicAfter(false, 30);
+  EXPECT_GT(with_override, 0);
+  EXPECT_LT(with_override, without);
+  EXPECT_EQ(dynamicAfter(true, 0), dynamicAfter(false, 0));
+  EXPECT_GT(dynamicAfter(true, 0), 0);
+}
+
+TEST(Tracker, AJitterOfTheCentreEstimateIsNoStepBack)
+{
+  // A car standing for 3 s, then rolling off at 2 m/s, regions split evenly; its centre
+  // estimate jitters back by 2 cm at every third image (its orientation fit). Below
+  // step_tolerance that is no step back: the progressive speed passes as without the jitter.
+  // With no tolerance the jitter breaks every progression and the verdict waits for the
+  // sustained speed.
+  auto dynamicAfter = [](double tolerance)
+  {
+    TrackerConfig config;
+    config.step_tolerance = tolerance;
+    Tracker tracker(config);
+    int k = 0;
+    for (; k < 30; ++k)
+    {
+      tracker.update(k * kFramePeriodS, {undecided(12.0, 3.0)});
+    }
+    const int start = k;
+    double x = 12.0;
+    for (; k <= start + 30; ++k)
+    {
+      x += (k - start) % 3 == 2 ? -0.02 : 0.3;
+      if (tracker.update(k * kFramePeriodS, {undecided(x, 3.0)})[0].motion == Motion::kDynamic)
+      {
+        return k - start;
+      }
+    }
+    return -1;
+  };
+  const int tolerant = dynamicAfter(TrackerConfig{}.step_tolerance);
+  EXPECT_GT(tolerant, 0);
+  EXPECT_LT(tolerant, dynamicAfter(0.0));
 }
 
 TEST(Tracker, AJumpOfTheCentreEstimateIsNoStart)
@@ -529,6 +680,10 @@ TEST(Tracker, ConfigValidation)
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.grid_velocity_agreement = 0.0; })),
                std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.grid_velocity_min_cells = 0; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.early_displacement = -1.0; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.step_tolerance = -0.1; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.still_window = -0.1; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.still_window = 1.5; })), std::invalid_argument);
   Tracker tracker;
   EXPECT_THROW(tracker.setConfig(bad([](TrackerConfig& c) { c.max_gap = 0.0; })), std::invalid_argument);
   EXPECT_DOUBLE_EQ(tracker.config().max_gap, TrackerConfig{}.max_gap);

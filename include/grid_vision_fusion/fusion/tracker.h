@@ -65,11 +65,12 @@ struct TrackerConfig
   /// when both the filter's speed and the sustained speed (the smaller of the average speeds of
   /// the observed position over the two halves of the last motion_speed_window, 0 when their
   /// directions differ by more than 90°: a jump of the centre estimate falls into one half only)
-  /// exceed motion_speed_threshold, or the progressive speed does (the second half's alone, when
-  /// its observed positions never step back and none by more than half of the way: a start from
-  /// rest, which the filter's speed lags), −weight when both the filter's speed and the average
-  /// speed of the filtered position over the window are below half of it. Needs a track older
-  /// than half the window; no +weight while the observed position, after a restart (a jump of
+  /// exceed motion_speed_threshold, or the progressive speed does (the observed position's over
+  /// the second half alone, when it never steps back and none by more than half of the way: a
+  /// start from rest, which the filter's speed lags), −weight when both the filter's speed and the average
+  /// speed of the filtered position over the window are below half of it (or the observed
+  /// position has stayed still, still_window). Needs a track older than half the window (younger
+  /// ones: early_displacement); no +weight while the observed position, after a restart (a jump of
   /// the centre estimate), heads back to where it was before the jump: the estimate recovering,
   /// not the object moving. Above 1 it outweighs a region vote that leans static: the grid does
   /// not resolve motion slower than about a cell per scan, whose cells stay occupied and turn
@@ -89,6 +90,30 @@ struct TrackerConfig
   double grid_velocity_evidence = 2.5;
   double grid_velocity_agreement = 0.5;  ///< share of the cells, (0, 1]
   int grid_velocity_min_cells = 4;       ///< >= 1
+  /// A young track, before the speed tests above can judge it (its history spans less than half
+  /// of motion_speed_window), gets +speed_evidence when its observed position has moved at least
+  /// this far [m], faster than motion_speed_threshold and steadily: over 2 steps or more, none
+  /// going back, none longer than 3/4 of the way (a jump of the centre estimate is one long
+  /// step; an image with fewer than 3 cells of the object gives no position to count from). A
+  /// car at 10 m/s is known in its third image instead of its sixth. 0: off. >= 0.
+  double early_displacement = 1.0;
+  /// −speed_evidence also when the observed position has stayed within half of
+  /// motion_speed_threshold × still_window of where it is now over the last still_window [s]: a
+  /// stop, which the filter's speed and the window's average see only a second later. 0: off.
+  /// [0, motion_speed_window].
+  double still_window = 0.5;
+  /// A step of the observed position shorter than this [m] does not count as a step back in the
+  /// tests of a steady displacement (progressive and early speed): the centre estimate's jitter
+  /// of a few centimetres (its orientation fit) is no reversal. >= 0.
+  double step_tolerance = 0.05;
+  /// A track older than motion_speed_window (since its birth or its last restart) whose own
+  /// speed gives +speed_evidence has its
+  /// region's static vote dropped from that image's evidence: the grid does not resolve motion
+  /// slower than about a cell per scan, whose cells it calls static, so a static vote does not
+  /// speak against a displacement the track has measured. A dynamic vote still counts. Younger
+  /// tracks keep the vote: their displacement may still be the centre estimate settling while
+  /// more of the object comes into view. false: the region's vote always counts.
+  bool speed_overrides_region = true;
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
   void validate() const;
@@ -161,6 +186,7 @@ private:
     double stamp = 0.0;
     Eigen::Vector2d filtered;
     Eigen::Vector2d observed;
+    std::uint32_t cells = 0;  ///< cells of the object's cluster
   };
 
   struct Track
@@ -181,6 +207,7 @@ private:
     double last_motion_change = 0.0;  ///< stamp of the last verdict change [s]
     /// The images of the last motion_speed_window, oldest first.
     std::deque<Sample> history;
+    double history_start = 0.0;  ///< stamp of the track's birth or last restart [s]
     bool restarted = false;      ///< restarted after a jump of the centre estimate...
     double restart_stamp = 0.0;  ///< ...at this stamp [s]...
     Eigen::Vector2d before_jump = Eigen::Vector2d::Zero();  ///< ...from this observed position
@@ -206,12 +233,23 @@ private:
   /// not.
   double sustainedSpeed(const Track& track) const;
   /// A start from rest, which the sustained speed sees only half a window later: the average
-  /// speed of the filtered position over the second half of the history when the observed
-  /// positions of that half have moved and never step back along their displacement (at least 3
-  /// steps; a step of zero is a slow object within its cell), none by more than half of it (a
-  /// jump of the centre estimate is one big step, and noise around a standing object steps back
-  /// and forth); 0 otherwise.
+  /// speed of the observed position over the second half of the history when it has moved
+  /// steadily (steadyDisplacement(): at least 3 steps, none back — a step of zero is a slow
+  /// object within its cell — none by more than half of the way: a jump of the centre estimate
+  /// is one big step, and noise around a standing object steps back and forth); 0 otherwise.
+  /// The observed, not the filtered, positions: the filter lags a start.
   double progressiveSpeed(const Track& track) const;
+  /// The speed of a young track (history shorter than half the window) whose observed position
+  /// has moved steadily by early_displacement or more (steadyDisplacement() from the oldest
+  /// entry, steps of at most 3/4), each of its images seeing at least 3 cells of the object; 0
+  /// otherwise.
+  double earlySpeed(const Track& track) const;
+  /// The length of the observed displacement from history[first] to the newest entry when it
+  /// went steadily: no step goes back along it (a step shorter than step_tolerance is none),
+  /// none is longer than max_share of it; 0 otherwise.
+  double steadyDisplacement(const Track& track, std::size_t first, double max_share) const;
+  /// The observed position has stayed still over the last still_window (still_window > 0).
+  bool stillRecently(const Track& track) const;
   /// The observed position has been heading back to where it was before the track's last
   /// restart, within motion_speed_window of it.
   bool returningAfterJump(const Track& track) const;

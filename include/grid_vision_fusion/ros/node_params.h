@@ -264,6 +264,10 @@ void visitParams(FusionParams& p, Visitor& v)
   v("motion_grid_velocity_evidence", t.grid_velocity_evidence);
   v("motion_grid_velocity_agreement", t.grid_velocity_agreement);
   v("motion_grid_velocity_min_cells", t.grid_velocity_min_cells);
+  v("motion_early_displacement", t.early_displacement);
+  v("motion_still_window", t.still_window);
+  v("motion_step_tolerance", t.step_tolerance);
+  v("motion_speed_overrides_region", t.speed_overrides_region);
 }
 
 /// The values of the table `params` by parameter name (the defaults for a default-constructed one).
