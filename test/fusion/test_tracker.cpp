@@ -318,6 +318,32 @@ TEST(Tracker, AGridVelocityWithoutDisplacementIsNoEvidence)
   }
 }
 
+/// Runs `tracker` on `before` images of `first(k)`, then on up to `after` images of `second(k)`
+/// (k counts the images of each phase from 0, 10 Hz throughout). Returns k of the first image of
+/// the second phase whose verdict is `wanted`, -1 when none is.
+template <typename First, typename Second>
+int firstVerdictAfter(Tracker& tracker, int before, First first, int after, Second second, Motion wanted)
+{
+  for (int k = 0; k < before; ++k)
+  {
+    tracker.update(k * kFramePeriodS, {first(k)});
+  }
+  for (int k = 0; k < after; ++k)
+  {
+    if (tracker.update((before + k) * kFramePeriodS, {second(k)})[0].motion == wanted)
+    {
+      return k;
+    }
+  }
+  return -1;
+}
+
+/// No image before the second phase.
+TrackObservation nothing(int /*k*/)
+{
+  return TrackObservation{};
+}
+
 TEST(Tracker, AFastNewTrackCountsItsEarlyDisplacement)
 {
   // A new track of a car at 10 m/s along x whose regions the grid splits evenly (the first
@@ -330,17 +356,13 @@ TEST(Tracker, AFastNewTrackCountsItsEarlyDisplacement)
     TrackerConfig config;
     config.early_displacement = early_displacement;
     Tracker tracker(config);
-    for (int k = 0; k < 15; ++k)
+    auto driving = [cells](int k)
     {
-      const double t = k * kFramePeriodS;
-      TrackObservation o = undecided(10.0 + 10.0 * t, 3.0);
+      TrackObservation o = undecided(10.0 + 1.0 * k, 3.0);
       o.grid_cells = cells;
-      if (tracker.update(t, {o})[0].motion == Motion::kDynamic)
-      {
-        return k;
-      }
-    }
-    return -1;
+      return o;
+    };
+    return firstVerdictAfter(tracker, 0, nothing, 15, driving, Motion::kDynamic);
   };
   EXPECT_EQ(dynamicFrom(TrackerConfig{}.early_displacement, 10), 2);
   EXPECT_EQ(dynamicFrom(0.0, 10), 5);
@@ -374,20 +396,9 @@ TEST(Tracker, AStopIsSeenOnceThePositionStandsStill)
     TrackerConfig config;
     config.still_window = still_window;
     Tracker tracker(config);
-    int k = 0;
-    for (; k < 30; ++k)
-    {
-      tracker.update(k * kFramePeriodS, {undecided(10.0 + 0.3 * k, 3.0)});
-    }
-    const int stop = k;
-    for (; k < stop + 30; ++k)
-    {
-      if (tracker.update(k * kFramePeriodS, {undecided(10.0 + 0.3 * stop, 3.0)})[0].motion == Motion::kStatic)
-      {
-        return k - stop;
-      }
-    }
-    return -1;
+    return firstVerdictAfter(
+        tracker, 30, [](int k) { return undecided(10.0 + 0.3 * k, 3.0); }, 30,
+        [](int /*k*/) { return undecided(10.0 + 0.3 * 30, 3.0); }, Motion::kStatic);
   };
   EXPECT_EQ(staticAfter(TrackerConfig{}.still_window), 6);
   EXPECT_GE(staticAfter(0.0), 10);
@@ -406,22 +417,9 @@ TEST(Tracker, AMeasuredSpeedOverridesTheStaticVoteOfAnOldTrackOnly)
     TrackerConfig config;
     config.speed_overrides_region = overrides;
     Tracker tracker(config);
-    int k = 0;
-    for (; k < standing_images; ++k)
-    {
-      tracker.update(k * kFramePeriodS, {observe("pedestrian", 12.0, 3.0, 400.F)});
-    }
-    const int start = k;
-    for (; k <= start + 30; ++k)
-    {
-      const double x = 12.0 + 1.2 * (k - start + 1) * kFramePeriodS;
-      if (tracker.update(k * kFramePeriodS, {observe("pedestrian", x, 3.0, 400.F)})[0].motion ==
-          Motion::kDynamic)
-      {
-        return k - start;
-      }
-    }
-    return -1;
+    return firstVerdictAfter(
+        tracker, standing_images, [](int /*k*/) { return observe("pedestrian", 12.0, 3.0, 400.F); }, 31,
+        [](int k) { return observe("pedestrian", 12.0 + 0.12 * (k + 1), 3.0, 400.F); }, Motion::kDynamic);
   };
   const int with_override = dynamicAfter(true, 30);
   const int without = dynamicAfter(false, 30);
@@ -443,22 +441,13 @@ TEST(Tracker, AJitterOfTheCentreEstimateIsNoStepBack)
     TrackerConfig config;
     config.step_tolerance = tolerance;
     Tracker tracker(config);
-    int k = 0;
-    for (; k < 30; ++k)
+    auto rolling = [](int k)
     {
-      tracker.update(k * kFramePeriodS, {undecided(12.0, 3.0)});
-    }
-    const int start = k;
-    double x = 12.0;
-    for (; k <= start + 30; ++k)
-    {
-      x += (k - start) % 3 == 2 ? -0.02 : 0.3;
-      if (tracker.update(k * kFramePeriodS, {undecided(x, 3.0)})[0].motion == Motion::kDynamic)
-      {
-        return k - start;
-      }
-    }
-    return -1;
+      // 0.3 m per image, 0.02 m back at every third one
+      return undecided(12.0 + 0.3 * (k + 1 - (k + 1) / 3) - 0.02 * ((k + 1) / 3), 3.0);
+    };
+    return firstVerdictAfter(
+        tracker, 30, [](int /*k*/) { return undecided(12.0, 3.0); }, 31, rolling, Motion::kDynamic);
   };
   const int tolerant = dynamicAfter(TrackerConfig{}.step_tolerance);
   EXPECT_GT(tolerant, 0);
