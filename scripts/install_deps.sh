@@ -14,7 +14,7 @@ packages=(
   python3-rostest python3-roslaunch librostest-dev
   libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev clang-format
   python3-rospy python3-sensor-msgs python3-geometry-msgs python3-nav-msgs
-  python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag
+  python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag python3-yaml
 )
 if [[ "${1:-}" == "--with-rviz" ]]; then
   packages+=(rviz)

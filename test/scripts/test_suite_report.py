@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Tests of scripts/suite_report.py (the scenario suite's summary) on small hand-made
-matches.csv files, and of scripts/evaluate_suite.sh's handling of bad input (with --devel: the
-devel space of a built catkin workspace).
+matches.csv files, of scripts/mirror_scenarios.py (mirrored drives) and of
+scripts/evaluate_suite.sh's handling of bad input (with --devel: the devel space of a built
+catkin workspace).
 
 usage: test_suite_report.py [--junit FILE] [--devel DIR]
 """
@@ -17,6 +18,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import mirror_scenarios  # noqa: E402
 import suite_report  # noqa: E402
 
 HEADER = ("frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
@@ -222,6 +224,78 @@ class EvaluateSuiteScriptTest(unittest.TestCase):
             self.assertEqual(result.returncode, 1)
             self.assertIn("scenario pedestrians_crossing: reuse: no %s/work/pedestrians_crossing/drive.bag failed"
                           % tmp, result.stderr)
+
+
+SCENARIO = """# suite-from-drive: marker only in the skipped copy
+seed: 5
+duration: 2.0
+road: {center_y: 1.0, half_width: 7.0, lane_width: 3.5}
+ego:
+  waypoints: [[0.0, 0.0, -1.75], [2.0, 10.0, -1.5]]
+actors:
+  - {type: Car, size: [4.0, 1.8, 1.5], color: "#884EA0", parked: {x: 20.0, y: -5.2, yaw: 0.1}}
+  - {type: Car, size: [4.0, 1.8, 1.5], color: "#CA6F1E", yaw: 0.2, waypoints: [[0.0, 30.0, 3.0, 0.2], [2.0, 26.0, 3.5, 0.3]]}
+  - {type: Cyclist, size: [1.8, 0.6, 1.7], color: "#F1C40F", constant_turn: {x: 5.0, y: 2.0, yaw: 0.3, speed: 4.0, yaw_rate: 0.05}}
+scenery:
+  - {x: 10.0, y: -14.0, yaw: 0.0, size: [60.0, 8.0, 12.0], color: "#A89F91"}
+"""
+
+
+class MirrorScenariosTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.tmp = self.dir.name
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def write(self, name, text):
+        os.makedirs(os.path.join(self.tmp, "in"), exist_ok=True)
+        with open(os.path.join(self.tmp, "in", name), "w") as f:
+            f.write(text)
+
+    def test_every_y_heading_and_turn_rate_is_negated(self):
+        import yaml
+        original = yaml.safe_load(SCENARIO)
+        mirrored = mirror_scenarios.mirror(yaml.safe_load(SCENARIO), 100, "test")
+        self.assertEqual(mirrored["seed"], 105)
+        self.assertEqual(mirrored["road"]["center_y"], -1.0)
+        self.assertEqual(mirrored["ego"]["waypoints"], [[0.0, 0.0, 1.75], [2.0, 10.0, 1.5]])
+        self.assertEqual(mirrored["actors"][0]["parked"], {"x": 20.0, "y": 5.2, "yaw": -0.1})
+        self.assertEqual(mirrored["actors"][1]["yaw"], -0.2)
+        self.assertEqual(mirrored["actors"][1]["waypoints"], [[0.0, 30.0, -3.0, -0.2], [2.0, 26.0, -3.5, -0.3]])
+        self.assertEqual(mirrored["actors"][2]["constant_turn"],
+                         {"x": 5.0, "y": -2.0, "yaw": -0.3, "speed": 4.0, "yaw_rate": -0.05})
+        self.assertEqual(mirrored["scenery"][0]["y"], 14.0)
+        # Mirrored twice (the seed moved back): the original.
+        self.assertEqual(mirror_scenarios.mirror(mirrored, -100, "test"), original)
+
+    def test_files_recorded_drives_and_bad_input(self):
+        self.write("a.yaml", SCENARIO.split("\n", 1)[1])
+        self.write("from_drive.yaml", SCENARIO)
+        out = os.path.join(self.tmp, "out")
+        self.assertEqual(mirror_scenarios.main(["--seed-offset", "1", os.path.join(self.tmp, "in"), out]), 0)
+        self.assertEqual(os.listdir(out), ["mirrored_a.yaml"])  # the recorded drive is skipped
+        self.write("bad.yaml", "ego:\n  waypoints: [[0.0, 0.0]]\n")
+        self.assertEqual(mirror_scenarios.main([os.path.join(self.tmp, "in"), out]), 1)
+        self.write("bad.yaml", "ego:\n  flying: {x: 0.0, y: 0.0}\n")
+        self.assertEqual(mirror_scenarios.main([os.path.join(self.tmp, "in"), out]), 1)
+        self.assertEqual(mirror_scenarios.main([os.path.join(self.tmp, "nowhere"), out]), 1)
+
+    def test_the_simulator_drives_the_mirrored_short_suite(self):
+        if not DEVEL:
+            self.skipTest("no --devel: make_synthetic_drive is needed")
+        out = os.path.join(self.tmp, "mirrored")
+        self.assertEqual(mirror_scenarios.main([os.path.join(ROOT, "test", "data", "suite_short"), out]), 0)
+        names = sorted(os.listdir(out))
+        self.assertEqual(len(names), 2)
+        for name in names:
+            result = subprocess.run([os.path.join(DEVEL, "lib", "grid_vision_fusion", "make_synthetic_drive"),
+                                     "--scenario", os.path.join(out, name), "--frames", "1",
+                                     "--calibration", os.path.join(ROOT, "data", "calibration", "2011_09_26"),
+                                     "--output", os.path.join(self.tmp, "drive_" + name)],
+                                    capture_output=True, text=True)
+            self.assertEqual(result.returncode, 0, result.stderr)
 
 
 def write_junit(path, result, tests):
