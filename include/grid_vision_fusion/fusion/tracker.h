@@ -67,14 +67,14 @@ struct TrackerConfig
   /// directions differ by more than 90°: a jump of the centre estimate falls into one half only)
   /// exceed motion_speed_threshold, or the progressive speed does (the observed position's over
   /// the second half alone, when it never steps back and none by more than half of the way: a
-  /// start from rest, which the filter's speed lags), −weight when both the filter's speed and the average
-  /// speed of the filtered position over the window are below half of it (or the observed
-  /// position has stayed still, still_window). Needs a track older than half the window (younger
-  /// ones: early_displacement); no +weight while the observed position, after a restart (a jump of
-  /// the centre estimate), heads back to where it was before the jump: the estimate recovering,
-  /// not the object moving. Above 1 it outweighs a region vote that leans static: the grid does
-  /// not resolve motion slower than about a cell per scan, whose cells stay occupied and turn
-  /// static.
+  /// start from rest, which the filter's speed lags), −weight when both the filter's speed and
+  /// the average speed of the filtered position over the window are below half of it (or the
+  /// observed position has stayed still, still_window). Needs a track older than half the window
+  /// (younger ones: early_displacement); no +weight while the observed position, after a restart
+  /// (a jump of the centre estimate), heads back to where it was before the jump: the estimate
+  /// recovering, not the object moving. Above 1 it outweighs a region vote that leans static:
+  /// the grid does not resolve motion slower than about a cell per scan, whose cells stay
+  /// occupied and turn static.
   double speed_evidence = 2.0;
   /// [m/s], > 0. Below the 1 m/s that counts as moving: the sustained speed, a minimum of two
   /// noisy averages, reads low.
@@ -107,12 +107,12 @@ struct TrackerConfig
   /// of a few centimetres (its orientation fit) is no reversal. >= 0.
   double step_tolerance = 0.05;
   /// A track older than motion_speed_window (since its birth or its last restart) whose own
-  /// speed gives +speed_evidence has its
-  /// region's static vote dropped from that image's evidence: the grid does not resolve motion
-  /// slower than about a cell per scan, whose cells it calls static, so a static vote does not
-  /// speak against a displacement the track has measured. A dynamic vote still counts. Younger
-  /// tracks keep the vote: their displacement may still be the centre estimate settling while
-  /// more of the object comes into view. false: the region's vote always counts.
+  /// speed gives +speed_evidence has its region's static vote dropped from that image's
+  /// evidence: the grid does not resolve motion slower than about a cell per scan, whose cells it
+  /// calls static, so a static vote does not speak against a displacement the track has
+  /// measured. A dynamic vote still counts. Younger tracks keep the vote: their displacement may
+  /// still be the centre estimate settling while more of the object comes into view. false: the
+  /// region's vote always counts.
   bool speed_overrides_region = true;
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
