@@ -31,7 +31,9 @@ def row(label, truth, predicted, band, speed=0.0, position="1.000", speed_error=
                                                         heading)
 
 
-class SuiteReportTest(unittest.TestCase):
+class TempDirTest(unittest.TestCase):
+    """A test case with a fresh temporary folder, self.tmp, removed after each test."""
+
     def setUp(self):
         self.dir = tempfile.TemporaryDirectory()
         self.tmp = self.dir.name
@@ -39,6 +41,8 @@ class SuiteReportTest(unittest.TestCase):
     def tearDown(self):
         self.dir.cleanup()
 
+
+class SuiteReportTest(TempDirTest):
     def scenario(self, name, rows):
         folder = os.path.join(self.tmp, name)
         os.makedirs(folder)
@@ -241,14 +245,7 @@ scenery:
 """
 
 
-class MirrorScenariosTest(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-        self.tmp = self.dir.name
-
-    def tearDown(self):
-        self.dir.cleanup()
-
+class MirrorScenariosTest(TempDirTest):
     def write(self, name, text):
         os.makedirs(os.path.join(self.tmp, "in"), exist_ok=True)
         with open(os.path.join(self.tmp, "in", name), "w") as f:
