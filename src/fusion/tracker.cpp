@@ -206,7 +206,6 @@ void Tracker::restart(Track& track, const TrackObservation& observation, double 
   track.restarted = !track.history.empty();  // a jump, not a new track
   if (track.restarted)
   {
-    track.restart_stamp = stamp_s;
     track.before_jump = track.history.back().observed;
   }
   track.history.clear();  // the displacement before a jump says nothing about the speed
@@ -360,7 +359,7 @@ bool Tracker::stillRecently(const Track& track) const
 bool Tracker::returningAfterJump(const Track& track) const
 {
   if (!track.restarted ||
-      track.history.back().stamp - track.restart_stamp > config_.motion_speed_window + 1e-9)
+      track.history.back().stamp - track.history_start > config_.motion_speed_window + 1e-9)
   {
     return false;
   }

@@ -208,8 +208,7 @@ private:
     /// The images of the last motion_speed_window, oldest first.
     std::deque<Sample> history;
     double history_start = 0.0;  ///< stamp of the track's birth or last restart [s]
-    bool restarted = false;      ///< restarted after a jump of the centre estimate...
-    double restart_stamp = 0.0;  ///< ...at this stamp [s]...
+    bool restarted = false;      ///< history_start is a restart after a jump of the centre estimate...
     Eigen::Vector2d before_jump = Eigen::Vector2d::Zero();  ///< ...from this observed position
   };
 
