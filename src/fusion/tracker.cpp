@@ -365,7 +365,16 @@ bool Tracker::returningAfterJump(const Track& track) const
   }
   const Eigen::Vector2d moved = track.history.back().observed - track.history.front().observed;
   const Eigen::Vector2d back = track.before_jump - track.history.front().observed;
-  return within45Degrees(moved, back);
+  if (!within45Degrees(moved, back))
+  {
+    return false;
+  }
+  // A recovering estimate heads back to the same spot: the position before the jump lies on the
+  // line of the displacement, within the estimate's noise (2 σ). One that passes it at a distance
+  // is an object moving, whose track had followed another object's cells before the jump (a
+  // wall behind a pedestrian).
+  const double offset = std::abs(moved.x() * back.y() - moved.y() * back.x()) / moved.norm();
+  return offset <= 2.0 * config_.position_sigma;
 }
 
 bool Tracker::gridVelocityAgrees(const Track& track, const TrackObservation& observation) const

@@ -344,6 +344,31 @@ TrackObservation nothing(int /*k*/)
   return TrackObservation{};
 }
 
+TEST(Tracker, AnObjectMovingPastThePositionBeforeAJumpIsNoReturn)
+{
+  // A pedestrian's track that followed the wall behind it (its cells won the region) for 1 s,
+  // then jumps to the pedestrian, 4 m nearer along x and 2.4 m to the side, who walks on along x
+  // at 1.5 m/s: toward the wall's position (31° off) but passing it 2.4 m away, no estimate
+  // heading back. Its regions are split evenly; its speed counts once half the window is filled and
+  // the progressive speed has its images. The same walk straight at the wall's position is taken
+  // for a return until a window has passed since the jump.
+  auto pedestrian = [](double x, double y)
+  {
+    TrackObservation o = undecided(x, y);
+    o.label = "pedestrian";
+    return o;
+  };
+  auto walkingFrom = [&](double lateral_offset)
+  {
+    Tracker tracker;
+    return firstVerdictAfter(
+        tracker, 10, [&](int /*k*/) { return pedestrian(18.0, 5.0); }, 15,
+        [&](int k) { return pedestrian(14.0 + 0.15 * k, 5.0 - lateral_offset); }, Motion::kDynamic);
+  };
+  EXPECT_EQ(walkingFrom(2.4), 6);
+  EXPECT_GE(walkingFrom(0.0), 10);  // no speed evidence for a window after the jump
+}
+
 TEST(Tracker, AFastNewTrackCountsItsEarlyDisplacement)
 {
   // A new track of a car at 10 m/s along x whose regions the grid splits evenly (the first

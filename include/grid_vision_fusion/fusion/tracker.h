@@ -71,10 +71,10 @@ struct TrackerConfig
   /// the average speed of the filtered position over the window are below half of it (or the
   /// observed position has stayed still, still_window). Needs a track older than half the window
   /// (younger ones: early_displacement); no +weight while the observed position, after a restart
-  /// (a jump of the centre estimate), heads back to where it was before the jump: the estimate
-  /// recovering, not the object moving. Above 1 it outweighs a region vote that leans static:
-  /// the grid does not resolve motion slower than about a cell per scan, whose cells stay
-  /// occupied and turn static.
+  /// (a jump of the centre estimate), heads back to where it was before the jump (passing it
+  /// within 2 position_sigma): the estimate recovering, not the object moving. Above 1 it
+  /// outweighs a region vote that leans static: the grid does not resolve motion slower than
+  /// about a cell per scan, whose cells stay occupied and turn static.
   double speed_evidence = 2.0;
   /// [m/s], > 0. Below the 1 m/s that counts as moving: the sustained speed, a minimum of two
   /// noisy averages, reads low.
@@ -250,7 +250,8 @@ private:
   /// The observed position has stayed still over the last still_window (still_window > 0).
   bool stillRecently(const Track& track) const;
   /// The observed position has been heading back to where it was before the track's last
-  /// restart, within motion_speed_window of it.
+  /// restart (within 45°, and passing that position within 2 track_position_sigma), within
+  /// motion_speed_window of it.
   bool returningAfterJump(const Track& track) const;
   /// The grid's velocity evidence of grid_velocity_evidence holds for this observation.
   bool gridVelocityAgrees(const Track& track, const TrackObservation& observation) const;
