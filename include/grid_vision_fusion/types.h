@@ -70,6 +70,9 @@ struct ProjectedPointsView
   const float* vx = nullptr;            ///< cell velocity x [m/s], grid frame
   const float* vy = nullptr;            ///< cell velocity y [m/s], grid frame
   const std::uint8_t* state = nullptr;  ///< CellState values
+  /// Scans since each point's cell last held obstacle points (0: the grid's scan); optional
+  /// (nullptr: every point counts as seen in the grid's scan). pointsViewOf() leaves it unset.
+  const std::uint8_t* scans_since_hit = nullptr;
 };
 
 /// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and

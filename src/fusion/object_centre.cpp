@@ -153,10 +153,80 @@ double axisCentre(double lo, double hi, double camera, double dimension)
   }
   return 0.5 * (lo + hi);
 }
+/// Steps 3.–4. of estimateCentre() on the cells (cx[i], cy[i]) (non-empty). `covers_more`
+/// receives whether they extend beyond the footprint along an axis (false without one).
+CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<double>& cy, double camera_x,
+                             double camera_y, const Footprint* footprint, bool& covers_more)
+{
+  CentreEstimate estimate;
+  estimate.cluster_points = cx.size();
+  estimate.yaw = fitOrientation(cx, cy);
+  const double c = std::cos(estimate.yaw);
+  const double s = std::sin(estimate.yaw);
+  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+  double a_sum = 0.0, b_sum = 0.0;
+  for (std::size_t k = 0; k < cx.size(); ++k)
+  {
+    const double a = c * cx[k] + s * cy[k];
+    const double b = -s * cx[k] + c * cy[k];
+    a_lo = std::min(a_lo, a);
+    a_hi = std::max(a_hi, a);
+    b_lo = std::min(b_lo, b);
+    b_hi = std::max(b_hi, b);
+    a_sum += a;
+    b_sum += b;
+  }
+  const double a_cam = c * camera_x + s * camera_y;
+  const double b_cam = -s * camera_x + c * camera_y;
+  double a_centre = 0.5 * (a_lo + a_hi);
+  double b_centre = 0.5 * (b_lo + b_hi);
+  if (footprint)
+  {
+    const double extent_a = a_hi - a_lo;
+    const double extent_b = b_hi - b_lo;
+    // Viewing direction in the outline's axes: the face along axis a is seen with weight |view_b|.
+    double view_a = a_sum / static_cast<double>(cx.size()) - a_cam;
+    double view_b = b_sum / static_cast<double>(cx.size()) - b_cam;
+    const double norm = std::hypot(view_a, view_b);
+    if (norm > 0.0)
+    {
+      view_a /= norm;
+      view_b /= norm;
+    }
+    auto mismatch = [&](double along_a, double along_b)
+    {
+      return std::max(0.0, extent_a - along_a) + std::max(0.0, extent_b - along_b) +
+             std::abs(view_b) * std::abs(extent_a - along_a) +
+             std::abs(view_a) * std::abs(extent_b - along_b);
+    };
+    const bool length_along_a =
+        mismatch(footprint->length, footprint->width) <= mismatch(footprint->width, footprint->length);
+    const double dim_a = length_along_a ? footprint->length : footprint->width;
+    const double dim_b = length_along_a ? footprint->width : footprint->length;
+    covers_more = extent_a > dim_a || extent_b > dim_b;
+    a_centre = axisCentre(a_lo, a_hi, a_cam, dim_a);
+    b_centre = axisCentre(b_lo, b_hi, b_cam, dim_b);
+    estimate.source = CentreSource::kCompleted;
+  }
+  else
+  {
+    estimate.source = CentreSource::kExtent;
+    covers_more = false;
+  }
+  estimate.x = c * a_centre - s * b_centre;
+  estimate.y = s * a_centre + c * b_centre;
+  return estimate;
+}
+
 }  // namespace
 
 void CentreConfig::validate() const
 {
+  if (max_scans_since_hit < -1 || max_scans_since_hit > 254)
+  {
+    throw std::invalid_argument("centre_max_scans_since_hit must be in [-1, 254], got " +
+                                std::to_string(max_scans_since_hit));
+  }
   if (!std::isfinite(cluster_distance) || cluster_distance <= 0.0)
   {
     throw std::invalid_argument("centre_cluster_distance must be a finite value > 0 m, got " +
@@ -284,79 +354,36 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
     throw std::invalid_argument("estimateCentre: no points");
   }
   return centreOfCluster(points, objectCluster(points, members, box, config.cluster_distance), camera_x,
-                         camera_y, footprint);
+                         camera_y, footprint, config.max_scans_since_hit);
 }
 
 CentreEstimate centreOfCluster(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cluster,
-                               double camera_x, double camera_y, const Footprint* footprint)
+                               double camera_x, double camera_y, const Footprint* footprint,
+                               int max_scans_since_hit)
 {
   if (cluster.empty())
   {
     throw std::invalid_argument("centreOfCluster: no points");
   }
-  std::vector<double> cx, cy;
+  std::vector<double> cx, cy, fresh_x, fresh_y;
   for (std::uint32_t i : cluster)
   {
     cx.push_back(points.x[i]);
     cy.push_back(points.y[i]);
-  }
-
-  CentreEstimate estimate;
-  estimate.cluster_points = cx.size();
-  estimate.yaw = fitOrientation(cx, cy);
-  const double c = std::cos(estimate.yaw);
-  const double s = std::sin(estimate.yaw);
-  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
-  double a_sum = 0.0, b_sum = 0.0;
-  for (std::size_t k = 0; k < cx.size(); ++k)
-  {
-    const double a = c * cx[k] + s * cy[k];
-    const double b = -s * cx[k] + c * cy[k];
-    a_lo = std::min(a_lo, a);
-    a_hi = std::max(a_hi, a);
-    b_lo = std::min(b_lo, b);
-    b_hi = std::max(b_hi, b);
-    a_sum += a;
-    b_sum += b;
-  }
-  const double a_cam = c * camera_x + s * camera_y;
-  const double b_cam = -s * camera_x + c * camera_y;
-  double a_centre = 0.5 * (a_lo + a_hi);
-  double b_centre = 0.5 * (b_lo + b_hi);
-  if (footprint)
-  {
-    const double extent_a = a_hi - a_lo;
-    const double extent_b = b_hi - b_lo;
-    // Viewing direction in the outline's axes: the face along axis a is seen with weight |view_b|.
-    double view_a = a_sum / static_cast<double>(cx.size()) - a_cam;
-    double view_b = b_sum / static_cast<double>(cx.size()) - b_cam;
-    const double norm = std::hypot(view_a, view_b);
-    if (norm > 0.0)
+    if (max_scans_since_hit >= 0 && points.scans_since_hit &&
+        points.scans_since_hit[i] <= max_scans_since_hit)
     {
-      view_a /= norm;
-      view_b /= norm;
+      fresh_x.push_back(points.x[i]);
+      fresh_y.push_back(points.y[i]);
     }
-    auto mismatch = [&](double along_a, double along_b)
-    {
-      return std::max(0.0, extent_a - along_a) + std::max(0.0, extent_b - along_b) +
-             std::abs(view_b) * std::abs(extent_a - along_a) +
-             std::abs(view_a) * std::abs(extent_b - along_b);
-    };
-    const bool length_along_a =
-        mismatch(footprint->length, footprint->width) <= mismatch(footprint->width, footprint->length);
-    const double dim_a = length_along_a ? footprint->length : footprint->width;
-    const double dim_b = length_along_a ? footprint->width : footprint->length;
-    a_centre = axisCentre(a_lo, a_hi, a_cam, dim_a);
-    b_centre = axisCentre(b_lo, b_hi, b_cam, dim_b);
-    estimate.source = CentreSource::kCompleted;
   }
-  else
+  bool covers_more = false;
+  const CentreEstimate all = centreOfCells(cx, cy, camera_x, camera_y, footprint, covers_more);
+  if (!covers_more || fresh_x.size() < kMinFreshCentreCells || fresh_x.size() == cx.size())
   {
-    estimate.source = CentreSource::kExtent;
+    return all;
   }
-  estimate.x = c * a_centre - s * b_centre;
-  estimate.y = s * a_centre + c * b_centre;
-  return estimate;
+  return centreOfCells(fresh_x, fresh_y, camera_x, camera_y, footprint, covers_more);
 }
 
 void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
@@ -378,7 +405,7 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
     const CentreEstimate centre =
         object.cluster.empty()
             ? estimateCentre(points, object.members, detection.box, camera_x, camera_y, size, config)
-            : centreOfCluster(points, object.cluster, camera_x, camera_y, size);
+            : centreOfCluster(points, object.cluster, camera_x, camera_y, size, config.max_scans_since_hit);
     object.x = centre.x;
     object.y = centre.y;
   }

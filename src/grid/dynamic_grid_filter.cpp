@@ -850,7 +850,6 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
   // scans, clearly free now (p_o <= 1/4) and believed occupied (P(S) + P(D) >= 0.6); the cells
   // that hold obstacle points are the occupied mask. Vacated cells are bucketed (counting sort)
   // for the search of motionVelocity().
-  const std::size_t cells = geometry_.cellCount();
   const bool evidence = config_.motion_window > 0.0;
   const int window =
       evidence
@@ -1065,28 +1064,22 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
             }
           }
         });
-    // Ages: scans since the cell last held obstacle points / was seen clearly free.
-    const auto uw = static_cast<std::size_t>(gw);
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
+  }
+  // Ages: scans since the cell last held obstacle points / was seen clearly free (the first for
+  // the fusion's centre estimate in every mode, both for the motion evidence).
+  const auto uw = static_cast<std::size_t>(geometry_.width);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * uw; c < static_cast<std::size_t>(r_end) * uw;
+             ++c)
         {
-          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
-               c < static_cast<std::size_t>(r_end) * uw; ++c)
-          {
-            const int hit_age = occupancy_[c] >= p_hit ? 0 : std::min((ages_[c] & 0xFF) + 1, 255);
-            const int free_age = occupancy_[c] <= kClearlyFree ? 0 : std::min((ages_[c] >> 8) + 1, 255);
-            ages_[c] = static_cast<std::uint16_t>(hit_age | (free_age << 8));
-            occupied_mask_[c] = occupancy_[c] >= p_hit ? 1 : 0;
-          }
-        });
-  }
-  else
-  {
-    for (std::size_t c = 0; c < cells; ++c)
-    {
-      occupied_mask_[c] = occupancy_[c] > 0.5F ? 1 : 0;
-    }
-  }
+          const int hit_age = occupancy_[c] >= p_hit ? 0 : std::min((ages_[c] & 0xFF) + 1, 255);
+          const int free_age = occupancy_[c] <= kClearlyFree ? 0 : std::min((ages_[c] >> 8) + 1, 255);
+          ages_[c] = static_cast<std::uint16_t>(hit_age | (free_age << 8));
+          occupied_mask_[c] = (evidence ? occupancy_[c] >= p_hit : occupancy_[c] > 0.5F) ? 1 : 0;
+        }
+      });
   have_previous_ = true;
 }
 

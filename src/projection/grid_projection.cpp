@@ -114,11 +114,17 @@ void ProjectedCells::reserve(std::size_t points)
     array->reserve(points);
   }
   state.reserve(points);
+  scans_since_hit.reserve(points);
 }
 
 ProjectedPointsView ProjectedCells::view() const
 {
-  return pointsViewOf(*this);
+  ProjectedPointsView view = pointsViewOf(*this);
+  if (scans_since_hit.size() == view.size)
+  {
+    view.scans_since_hit = scans_since_hit.data();
+  }
+  return view;
 }
 
 ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,
@@ -244,6 +250,10 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
         out.p_static.push_back(ps);
         out.p_dynamic.push_back(pd);
         out.state.push_back(static_cast<std::uint8_t>(state));
+        if (grid.scans_since_hit)
+        {
+          out.scans_since_hit.push_back(grid.scans_since_hit[i]);
+        }
       }
     }
   }

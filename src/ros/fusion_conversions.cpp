@@ -78,12 +78,22 @@ std::string checkProjectedGrid(const ProjectedGrid& msg)
       return error.str();
     }
   }
+  if (!msg.scans_since_hit.empty() && msg.scans_since_hit.size() != n)
+  {
+    return "ProjectedGrid array scans_since_hit has " + std::to_string(msg.scans_since_hit.size()) +
+           " elements, expected none (not carried) or as many as u: " + std::to_string(n);
+  }
   return {};
 }
 
 ProjectedPointsView viewOf(const ProjectedGrid& msg)
 {
-  return pointsViewOf(msg);
+  ProjectedPointsView view = pointsViewOf(msg);
+  if (msg.scans_since_hit.size() == view.size)  // optional
+  {
+    view.scans_since_hit = msg.scans_since_hit.data();
+  }
+  return view;
 }
 
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,

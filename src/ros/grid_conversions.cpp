@@ -52,6 +52,11 @@ DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msg
   msg->vy = s.vy;
   msg->v_var_x = s.v_var_x;
   msg->v_var_y = s.v_var_y;
+  msg->scans_since_hit.resize(g.cellCount());
+  for (std::size_t i = 0; i < msg->scans_since_hit.size(); ++i)
+  {
+    msg->scans_since_hit[i] = filter.scansSinceHit(i);
+  }
   return msg;
 }
 

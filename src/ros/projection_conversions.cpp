@@ -31,6 +31,11 @@ std::string checkDynamicGrid(const DynamicGrid& msg)
       return error.str();
     }
   }
+  if (!msg.scans_since_hit.empty() && msg.scans_since_hit.size() != cells)
+  {
+    return "DynamicGrid array scans_since_hit has " + std::to_string(msg.scans_since_hit.size()) +
+           " elements, expected none or width*height = " + std::to_string(cells);
+  }
   if (!std::isfinite(msg.info.resolution) || !(msg.info.resolution > 0.F))
   {
     return "DynamicGrid info.resolution must be finite and > 0, got " + std::to_string(msg.info.resolution);
@@ -69,6 +74,10 @@ GridCellsView gridCellsViewOf(const DynamicGrid& msg)
   {
     view.v_var_x = msg.v_var_x.data();
     view.v_var_y = msg.v_var_y.data();
+  }
+  if (msg.scans_since_hit.size() == cells)  // optional too
+  {
+    view.scans_since_hit = msg.scans_since_hit.data();
   }
   return view;
 }
@@ -121,6 +130,7 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
   msg->p_static = std::move(cells.p_static);
   msg->p_dynamic = std::move(cells.p_dynamic);
   msg->state = std::move(cells.state);
+  msg->scans_since_hit = std::move(cells.scans_since_hit);
   return msg;
 }
 

@@ -3,6 +3,7 @@
 // without a footprint; and of the outline orientation fit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -174,6 +175,47 @@ TEST(ObjectCentre, ObservedExtentLargerThanTheFootprintIsKept)
   EXPECT_NEAR(c.y, 6.0 + 1.3, 1e-6);
 }
 
+TEST(ObjectCentre, ATrailOfCellsTheLidarNoLongerHitsIsLeftOut)
+{
+  // A car creeping along +x, its near side at y = 5 seen from (10, 0): this scan hit its side
+  // from x = 9 to 12.8 (the car spans 9 to 12.9, centre 10.95); the cells it left from x = 7.8
+  // to 8.8 were last hit 8 scans ago and stay occupied (the lidar does not see them: the next
+  // car of the queue hides them). All cells span 5 m, more than the car: their middle (10.3)
+  // lies 0.65 m behind it. The fresh cells alone give 10.9.
+  ProjectedPoints points;
+  addFace(points, 7.8, 5.0, 8.8, 5.0);
+  const std::size_t trail = points.size();
+  addFace(points, 9.0, 5.0, 12.8, 5.0);
+  std::vector<std::uint8_t> ages(points.size(), 0);
+  std::fill(ages.begin(), ages.begin() + static_cast<std::ptrdiff_t>(trail), 8);
+  ProjectedPointsView view = points.view();
+  const auto centreX = [&](const ProjectedPointsView& v, int max_scans_since_hit)
+  { return centreOfCluster(v, all(points), 10.0, 0.0, &kCar, max_scans_since_hit).x; };
+  EXPECT_NEAR(centreX(view, 0), 10.3, 1e-6) << "no ages given: every cell";
+  view.scans_since_hit = ages.data();
+  EXPECT_NEAR(centreX(view, 0), 10.9, 1e-6);
+  EXPECT_NEAR(centreX(view, 7), 10.9, 1e-6);
+  EXPECT_NEAR(centreX(view, 8), 10.3, 1e-6) << "the trail is recent enough";
+  EXPECT_NEAR(centreX(view, -1), 10.3, 1e-6) << "-1: every cell";
+  CentreConfig config;
+  EXPECT_EQ(config.max_scans_since_hit, 0);
+  EXPECT_NEAR(estimateCentre(view, all(points), kBox, 10.0, 0.0, &kCar, config).x, 10.9, 1e-6);
+
+  // A parked car whose cells fit its footprint keeps them all, the ones the lidar no longer
+  // sees (hidden now) included: they are where the car is.
+  ProjectedPoints parked;
+  addFace(parked, 9.0, 5.0, 12.8, 5.0);
+  std::vector<std::uint8_t> parked_ages(parked.size(), 0);
+  std::fill(parked_ages.begin(), parked_ages.begin() + 6, 20);
+  ProjectedPointsView parked_view = parked.view();
+  parked_view.scans_since_hit = parked_ages.data();
+  EXPECT_NEAR(centreOfCluster(parked_view, all(parked), 10.0, 0.0, &kCar, 0).x, 10.9, 1e-6);
+  // Fewer than kMinFreshCentreCells fresh cells: all of them.
+  std::fill(ages.begin(), ages.end(), 8);
+  std::fill(ages.end() - 2, ages.end(), 0);
+  EXPECT_NEAR(centreX(view, 0), 10.3, 1e-6);
+}
+
 TEST(ObjectCentre, OrientationOfARotatedOutline)
 {
   for (const double deg : {0.0, 10.0, 37.0, 80.0})
@@ -207,6 +249,12 @@ TEST(ObjectCentre, ConfigAndInputChecks)
   config = CentreConfig{};
   config.footprints[""] = Footprint{1.0, 1.0};
   EXPECT_THROW(config.validate(), std::invalid_argument);
+  for (const int bad : {-2, 255})
+  {
+    config = CentreConfig{};
+    config.max_scans_since_hit = bad;
+    EXPECT_THROW(config.validate(), std::invalid_argument) << bad;
+  }
   FusionConfig fusion;
   fusion.centre.cluster_distance = std::nan("");
   EXPECT_THROW(fusion.validate(), std::invalid_argument);

@@ -37,12 +37,26 @@ TEST(FusionConversions, CheckProjectedGridNamesTheShortArray)
 
 TEST(FusionConversions, ViewBorrowsTheArrays)
 {
-  const ProjectedGrid grid = makeGrid(4);
-  const ProjectedPointsView view = viewOf(grid);
+  ProjectedGrid grid = makeGrid(4);
+  ProjectedPointsView view = viewOf(grid);
   EXPECT_EQ(view.size, 4U);
   EXPECT_EQ(view.u, grid.u.data());
   EXPECT_EQ(view.vy, grid.vy.data());
   EXPECT_EQ(view.state, grid.state.data());
+  EXPECT_EQ(view.scans_since_hit, nullptr);  // optional, not carried
+  grid.scans_since_hit.assign(4, 0);
+  view = viewOf(grid);
+  EXPECT_EQ(view.scans_since_hit, grid.scans_since_hit.data());
+}
+
+TEST(FusionConversions, TheCellAgesAreOptionalButNeverShort)
+{
+  ProjectedGrid grid = makeGrid(3);
+  grid.scans_since_hit.assign(3, 1);
+  EXPECT_EQ(checkProjectedGrid(grid), "");
+  grid.scans_since_hit.pop_back();
+  const std::string error = checkProjectedGrid(grid);
+  EXPECT_NE(error.find("scans_since_hit has 2"), std::string::npos) << error;
 }
 
 TEST(FusionConversions, ObjectsCarryEveryField)

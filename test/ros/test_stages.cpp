@@ -12,6 +12,7 @@
 #include "grid_vision_fusion/ros/detector_stage.h"
 #include "grid_vision_fusion/ros/fusion_stage.h"
 #include "grid_vision_fusion/ros/grid_stage.h"
+#include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
 
@@ -38,8 +39,9 @@ geometry_msgs::TransformStamped transform(const std::string& parent, const std::
   return t;
 }
 
-/// A cloud in `frame` with a wall of points 10 m ahead of the sensor (x, y, z float32).
-sensor_msgs::PointCloud2 wallCloud(const std::string& frame)
+/// A cloud in `frame` with a wall of points `distance` ahead of the sensor (x, y, z float32):
+/// every other point on the ground 1.73 m below the sensor, the others 1.2 m above it.
+sensor_msgs::PointCloud2 wallCloud(const std::string& frame, float distance = 10.0F)
 {
   sensor_msgs::PointCloud2 cloud;
   cloud.header.stamp = kStamp;
@@ -50,9 +52,9 @@ sensor_msgs::PointCloud2 wallCloud(const std::string& frame)
   sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
   for (int i = 0; i < 200; ++i, ++x, ++y, ++z)
   {
-    *x = 10.0F;
+    *x = distance;
     *y = -2.0F + 0.02F * static_cast<float>(i);
-    *z = -1.0F;
+    *z = i % 2 == 0 ? -1.73F : -0.53F;
   }
   return cloud;
 }
@@ -73,6 +75,24 @@ TEST(GridStage, UpdatesFromTfAndPublishesInTheFixedFrame)
   EXPECT_EQ(grid->p_static.size(), static_cast<std::size_t>(params.filter.width * params.filter.height));
   EXPECT_EQ(stage.occupancyMsg()->header.stamp, kStamp);
   EXPECT_EQ(stage.cellsMsg()->header.frame_id, "world");
+  // The cells' ages: 0 where the wall's points fell (x = 15 m in the world: the cell before or
+  // after that edge), 255 where no point ever did; one scan later, the wall 2 m farther, 1.
+  ASSERT_EQ(grid->scans_since_hit.size(), grid->p_static.size());
+  const auto ageAt = [](const DynamicGrid& g, double x, double y)
+  {
+    const auto col = static_cast<std::size_t>((x - g.info.origin.position.x) / g.info.resolution);
+    const auto row = static_cast<std::size_t>((y - g.info.origin.position.y) / g.info.resolution);
+    return static_cast<int>(g.scans_since_hit.at(row * g.info.width + col));
+  };
+  EXPECT_EQ(std::min(ageAt(*grid, 14.9, 0.1), ageAt(*grid, 15.1, 0.1)), 0);
+  EXPECT_EQ(ageAt(*grid, 25.1, 5.1), 255);
+  sensor_msgs::PointCloud2 farther = wallCloud("velo_link", 12.0F);
+  farther.header.stamp = kStamp + ros::Duration(0.1);
+  tf.setTransform(transform("world", "velo_link", 5.0, 1.73, farther.header.stamp), "test", true);
+  stage.update(farther, tf);
+  const DynamicGrid::Ptr later = stage.gridMsg();
+  EXPECT_EQ(std::min(ageAt(*later, 14.9, 0.1), ageAt(*later, 15.1, 0.1)), 1);
+  EXPECT_EQ(std::min(ageAt(*later, 16.9, 0.1), ageAt(*later, 17.1, 0.1)), 0);
 }
 
 TEST(GridStage, RefusesACloudWithoutFloatFieldsOrWithoutTf)
@@ -127,6 +147,16 @@ TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
   EXPECT_EQ(projected->header.frame_id, "camera");
   EXPECT_EQ(projected->grid_frame_id, "world");
   EXPECT_GT(projected->u.size(), 0U);
+  EXPECT_TRUE(projected->scans_since_hit.empty()) << "the grid carried no ages";
+  // With the cells' ages, every point carries its cell's.
+  DynamicGrid aged = grid;
+  aged.scans_since_hit.assign(16, 3);
+  const ProjectedGrid::Ptr aged_projected = stage.project(aged, info, tf);
+  ASSERT_EQ(aged_projected->scans_since_hit.size(), aged_projected->u.size());
+  EXPECT_EQ(aged_projected->scans_since_hit.front(), 3);
+  aged.scans_since_hit.resize(15);
+  EXPECT_NE(checkDynamicGrid(aged).find("scans_since_hit has 15"), std::string::npos)
+      << checkDynamicGrid(aged);
 
   DynamicGrid old_grid = grid;
   old_grid.header.stamp = kStamp - ros::Duration(2.0);

@@ -28,6 +28,12 @@ struct CentreConfig
   /// Cells nearer than this to each other belong to the same cluster (single linkage) [m], > 0.
   /// Grid cells of one object touch (0.2 m grid), objects in a row are rarely this close.
   double cluster_distance = 0.5;
+  /// The cells of the object's cluster whose lidar hit is older than this many scans
+  /// (ProjectedPointsView::scans_since_hit) are left out of its centre, as long as
+  /// kMinFreshCentreCells remain: the grid keeps the occupancy of the cells an object has left
+  /// where the lidar cannot see them (behind the next car of a queue), and this trail drags the
+  /// centre behind a slow object. -1: every cell of the cluster. In [-1, 254].
+  int max_scans_since_hit = 0;
   /// Footprint per detector label (lower case, as published). The defaults are the mean
   /// dimensions of the KITTI object benchmark's classes; a label without an entry gets the
   /// extent of its cells only (no completion).
@@ -37,10 +43,14 @@ struct CentreConfig
       {"tram", {16.1, 2.5}},      {"misc", {3.6, 1.5}},
   };
 
-  /// @throws std::invalid_argument naming the first bad field (cluster_distance not finite or
+  /// @throws std::invalid_argument naming the first bad field (max_scans_since_hit outside
+  ///         [-1, 254], cluster_distance not finite or
   ///         <= 0, a footprint dimension not finite or <= 0, an empty label).
   void validate() const;
 };
+
+/// Fewest recently hit cells (CentreConfig::max_scans_since_hit) that make a centre on their own.
+constexpr std::size_t kMinFreshCentreCells = 3;
 
 /// Where a centre estimate comes from.
 enum class CentreSource : std::uint8_t
@@ -55,7 +65,7 @@ struct CentreEstimate
   double x = 0.0;                  ///< centre x [m], frame of the points
   double y = 0.0;                  ///< centre y [m]
   double yaw = 0.0;                ///< orientation of the fitted outline's first axis, [0, π/2) [rad]
-  std::size_t cluster_points = 0;  ///< cells of the cluster taken as the object
+  std::size_t cluster_points = 0;  ///< cells it comes from (the cluster's, or its recently hit ones)
   CentreSource source = CentreSource::kCompleted;
 };
 
@@ -97,9 +107,12 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
                               const Footprint* footprint, const CentreConfig& config);
 
 /// Steps 3.–4. of estimateCentre() on the object's cells `cluster` (indices into `points`,
-/// non-empty), e.g. the cluster fuse() has found (FusedObject::cluster).
+/// non-empty), e.g. the cluster fuse() has found (FusedObject::cluster): on those of its cells
+/// hit within `max_scans_since_hit` scans when points.scans_since_hit is given, the bound is
+/// >= 0 and at least kMinFreshCentreCells are; on all of them otherwise.
 /// @throws std::invalid_argument when `cluster` is empty.
 CentreEstimate centreOfCluster(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cluster,
-                               double camera_x, double camera_y, const Footprint* footprint);
+                               double camera_x, double camera_y, const Footprint* footprint,
+                               int max_scans_since_hit = -1);
 
 }  // namespace grid_vision_fusion

@@ -177,6 +177,13 @@ public:
   const ParticleArrays& particles() const { return particles_; }
   /// p_o of the last scan per cell (0.5 = no information).
   const std::vector<float>& measuredOccupancy() const { return occupancy_; }
+  /// Scans since cell `index` last held obstacle points: 0 for the last scan, 255 for never (or
+  /// 255 scans and more). Cells keep their occupancy where the sensor does not see them (behind
+  /// other objects); this tells how fresh it is.
+  std::uint8_t scansSinceHit(std::size_t index) const
+  {
+    return static_cast<std::uint8_t>(ages_[index] & 0xFF);
+  }
   /// Ground height below the sensor of the last scan, fixed frame z [m].
   double groundZ() const { return ground_z_; }
   bool initialised() const { return initialised_; }

@@ -32,6 +32,9 @@ struct GridCellsView
   /// see GridProjectionConfig::mahalanobis_threshold).
   const float* v_var_x = nullptr;
   const float* v_var_y = nullptr;
+  /// Scans since each cell last held obstacle points (DynamicGridFilter::scansSinceHit());
+  /// optional (nullptr: every cell counts as seen in the grid's scan).
+  const std::uint8_t* scans_since_hit = nullptr;
 
   std::size_t size() const { return static_cast<std::size_t>(width) * height; }
   /// @throws std::invalid_argument when the resolution is not finite and > 0, the origin is not
@@ -127,6 +130,9 @@ struct ProjectedCells
 {
   std::vector<float> u, v, depth, x, y, vx, vy, p_static, p_dynamic;
   std::vector<std::uint8_t> state;  ///< CellState values
+  /// Per point, the cell's scans since it last held obstacle points; empty without
+  /// GridCellsView::scans_since_hit.
+  std::vector<std::uint8_t> scans_since_hit;
 
   std::size_t cells_selected = 0;  ///< cells that passed the occupancy threshold
   std::size_t cells_invalid =

@@ -241,6 +241,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("motion_vote", p.fusion.motion_vote);
   v("position", p.fusion.position);
   v("centre_cluster_distance", p.fusion.centre.cluster_distance);
+  v("centre_max_scans_since_hit", p.fusion.centre.max_scans_since_hit);
   v("class_footprints", p.fusion.centre.footprints);
   v("tracking", p.tracking);
   auto& t = p.tracker;
