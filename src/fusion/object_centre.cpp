@@ -24,27 +24,45 @@ constexpr double kBelowToleranceFraction = 0.05;
 /// cells of what stands behind it higher.
 constexpr double kAboveToleranceFraction = 0.1;
 
+/// The extent of the points (x[i], y[i]) (non-empty) along the axes a = (c, s) and b = (−s, c)
+/// of a rectangle, and their mean along each.
+struct AxisExtent
+{
+  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+  double a_mean = 0.0, b_mean = 0.0;
+};
+
+AxisExtent axisExtent(const std::vector<double>& x, const std::vector<double>& y, double c, double s)
+{
+  AxisExtent e;
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    const double a = c * x[i] + s * y[i];
+    const double b = -s * x[i] + c * y[i];
+    e.a_lo = std::min(e.a_lo, a);
+    e.a_hi = std::max(e.a_hi, a);
+    e.b_lo = std::min(e.b_lo, b);
+    e.b_hi = std::max(e.b_hi, b);
+    e.a_mean += a;
+    e.b_mean += b;
+  }
+  e.a_mean /= static_cast<double>(x.size());
+  e.b_mean /= static_cast<double>(x.size());
+  return e;
+}
+
 /// Closeness score of the bounding rectangle at orientation `theta` (higher is better).
 double closeness(const std::vector<double>& x, const std::vector<double>& y, double theta)
 {
   const double c = std::cos(theta);
   const double s = std::sin(theta);
-  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min, b_min = a_min, b_max = -a_min;
-  for (std::size_t i = 0; i < x.size(); ++i)
-  {
-    const double a = c * x[i] + s * y[i];
-    const double b = -s * x[i] + c * y[i];
-    a_min = std::min(a_min, a);
-    a_max = std::max(a_max, a);
-    b_min = std::min(b_min, b);
-    b_max = std::max(b_max, b);
-  }
+  const AxisExtent e = axisExtent(x, y, c, s);
   double score = 0.0;
   for (std::size_t i = 0; i < x.size(); ++i)
   {
     const double a = c * x[i] + s * y[i];
     const double b = -s * x[i] + c * y[i];
-    const double d = std::min(std::min(a - a_min, a_max - a), std::min(b - b_min, b_max - b));
+    const double d = std::min(std::min(a - e.a_lo, e.a_hi - a), std::min(b - e.b_lo, e.b_hi - b));
     score += 1.0 / std::max(d, kMinEdgeDistanceM);
   }
   return score;
@@ -163,30 +181,18 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
   estimate.yaw = fitOrientation(cx, cy);
   const double c = std::cos(estimate.yaw);
   const double s = std::sin(estimate.yaw);
-  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
-  double a_sum = 0.0, b_sum = 0.0;
-  for (std::size_t k = 0; k < cx.size(); ++k)
-  {
-    const double a = c * cx[k] + s * cy[k];
-    const double b = -s * cx[k] + c * cy[k];
-    a_lo = std::min(a_lo, a);
-    a_hi = std::max(a_hi, a);
-    b_lo = std::min(b_lo, b);
-    b_hi = std::max(b_hi, b);
-    a_sum += a;
-    b_sum += b;
-  }
+  const AxisExtent e = axisExtent(cx, cy, c, s);
   const double a_cam = c * camera_x + s * camera_y;
   const double b_cam = -s * camera_x + c * camera_y;
-  double a_centre = 0.5 * (a_lo + a_hi);
-  double b_centre = 0.5 * (b_lo + b_hi);
+  double a_centre = 0.5 * (e.a_lo + e.a_hi);
+  double b_centre = 0.5 * (e.b_lo + e.b_hi);
   if (footprint)
   {
-    const double extent_a = a_hi - a_lo;
-    const double extent_b = b_hi - b_lo;
+    const double extent_a = e.a_hi - e.a_lo;
+    const double extent_b = e.b_hi - e.b_lo;
     // Viewing direction in the outline's axes: the face along axis a is seen with weight |view_b|.
-    double view_a = a_sum / static_cast<double>(cx.size()) - a_cam;
-    double view_b = b_sum / static_cast<double>(cx.size()) - b_cam;
+    double view_a = e.a_mean - a_cam;
+    double view_b = e.b_mean - b_cam;
     const double norm = std::hypot(view_a, view_b);
     if (norm > 0.0)
     {
@@ -204,8 +210,8 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
     const double dim_a = length_along_a ? footprint->length : footprint->width;
     const double dim_b = length_along_a ? footprint->width : footprint->length;
     covers_more = extent_a > dim_a || extent_b > dim_b;
-    a_centre = axisCentre(a_lo, a_hi, a_cam, dim_a);
-    b_centre = axisCentre(b_lo, b_hi, b_cam, dim_b);
+    a_centre = axisCentre(e.a_lo, e.a_hi, a_cam, dim_a);
+    b_centre = axisCentre(e.b_lo, e.b_hi, b_cam, dim_b);
     estimate.source = CentreSource::kCompleted;
   }
   else
