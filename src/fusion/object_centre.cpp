@@ -171,6 +171,7 @@ double axisCentre(double lo, double hi, double camera, double dimension)
   }
   return 0.5 * (lo + hi);
 }
+
 /// Steps 3.–4. of estimateCentre() on the cells (cx[i], cy[i]) (non-empty). `covers_more`
 /// receives whether they extend beyond the footprint along an axis (false without one).
 CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<double>& cy, double camera_x,

@@ -28,11 +28,13 @@ struct CentreConfig
   /// Cells nearer than this to each other belong to the same cluster (single linkage) [m], > 0.
   /// Grid cells of one object touch (0.2 m grid), objects in a row are rarely this close.
   double cluster_distance = 0.5;
-  /// The cells of the object's cluster whose lidar hit is older than this many scans
-  /// (ProjectedPointsView::scans_since_hit) are left out of its centre, as long as
-  /// kMinFreshCentreCells remain: the grid keeps the occupancy of the cells an object has left
-  /// where the lidar cannot see them (behind the next car of a queue), and this trail drags the
-  /// centre behind a slow object. -1: every cell of the cluster. In [-1, 254].
+  /// When the cells of the object's cluster cover more than its footprint along an axis, those
+  /// whose last lidar hit is older than this many scans (ProjectedPointsView::scans_since_hit)
+  /// are left out of its centre, as long as kMinFreshCentreCells remain: the grid keeps the
+  /// occupancy of the cells an object has left where the lidar cannot see them (behind the next
+  /// car of a queue), and this trail drags the centre behind a slow object. Cells that fit the
+  /// footprint all count (a parked car's parts hidden now are still where it is). -1: every cell
+  /// of the cluster. In [-1, 254].
   int max_scans_since_hit = 0;
   /// Footprint per detector label (lower case, as published). The defaults are the mean
   /// dimensions of the KITTI object benchmark's classes; a label without an entry gets the
@@ -108,8 +110,9 @@ CentreEstimate estimateCentre(const ProjectedPointsView& points, const std::vect
 
 /// Steps 3.–4. of estimateCentre() on the object's cells `cluster` (indices into `points`,
 /// non-empty), e.g. the cluster fuse() has found (FusedObject::cluster): on those of its cells
-/// hit within `max_scans_since_hit` scans when points.scans_since_hit is given, the bound is
-/// >= 0 and at least kMinFreshCentreCells are; on all of them otherwise.
+/// hit within `max_scans_since_hit` scans when its cells cover more than `footprint` along an
+/// axis, points.scans_since_hit is given, the bound is >= 0 and at least kMinFreshCentreCells
+/// are; on all of them otherwise (see CentreConfig::max_scans_since_hit).
 /// @throws std::invalid_argument when `cluster` is empty.
 CentreEstimate centreOfCluster(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cluster,
                                double camera_x, double camera_y, const Footprint* footprint,
