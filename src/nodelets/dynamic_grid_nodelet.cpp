@@ -2,13 +2,11 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
-#include <message_filters/subscriber.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 #include <boost/thread/lock_guard.hpp>
 #include <boost/thread/mutex.hpp>
@@ -21,6 +19,7 @@
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
 #include "grid_vision_fusion/ros/grid_stage.h"
+#include "grid_vision_fusion/ros/tf_wait_queue.h"
 
 namespace grid_vision_fusion
 {
@@ -32,12 +31,14 @@ constexpr double kThrottleS = 5.0;
 class DynamicGridNodelet : public nodelet::Nodelet
 {
   using ReconfigureServer = dynamic_reconfigure::Server<DynamicGridReconfigureConfig>;
-  using TfFilter = tf2_ros::MessageFilter<sensor_msgs::PointCloud2>;
+  using TfQueue = TfWaitQueue<sensor_msgs::PointCloud2>;
 
   void onInit() override;
   void connectCb();
+  /// A cloud whose tf (fixed_frame <- cloud frame) is available at its stamp.
   void cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg);
-  void tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg, tf2_ros::FilterFailureReason reason);
+  void tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg, TfWaitDrop reason);
+  void subscribePoints();
   void reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
@@ -48,8 +49,9 @@ class DynamicGridNodelet : public nodelet::Nodelet
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  message_filters::Subscriber<sensor_msgs::PointCloud2> sub_points_;
-  std::unique_ptr<TfFilter> tf_filter_;
+  std::unique_ptr<TfQueue> tf_queue_;  // the clouds waiting for their tf
+  ros::WallTimer tf_poll_timer_;       // (destroyed before the queue, the subscriber too)
+  ros::Subscriber sub_points_;
 
   ros::Publisher pub_grid_;
   ros::Publisher pub_occupancy_;
@@ -101,11 +103,14 @@ void DynamicGridNodelet::onInit()
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-  tf_filter_ = std::make_unique<TfFilter>(sub_points_, *tf_buffer_, fixed_frame_,
-                                          static_cast<std::uint32_t>(params.queue_size), nh);
-  tf_filter_->registerCallback(boost::bind(&DynamicGridNodelet::cloudCb, this, boost::placeholders::_1));
-  tf_filter_->registerFailureCallback(
-      boost::bind(&DynamicGridNodelet::tfFailureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+  tf_queue_ = std::make_unique<TfQueue>(
+      *tf_buffer_, static_cast<std::size_t>(params.queue_size),
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud) { cloudCb(cloud); },
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, TfWaitDrop reason)
+      { tfFailureCb(cloud, reason); });
+  tf_queue_->setTargetFrames({fixed_frame_});
+  tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
+                                      [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   updater_->setHardwareID("none");
@@ -129,7 +134,7 @@ void DynamicGridNodelet::onInit()
   pub_cells_ = nh.advertise<sensor_msgs::PointCloud2>("grid/cells", 1, connect_cb, connect_cb);
   if (!params.lazy)
   {
-    sub_points_.subscribe(nh, "points", static_cast<std::uint32_t>(params.queue_size));
+    subscribePoints();
   }
   NODELET_INFO("dynamic_grid: %dx%d cells of %.2f m in %s, %d particles, seed %u, %s", config.width,
                config.height, config.resolution, fixed_frame_.c_str(), config.particle_count, config.seed,
@@ -147,12 +152,21 @@ void DynamicGridNodelet::connectCb()
                           pub_cells_.getNumSubscribers() > 0;
   if (!any_output)
   {
-    sub_points_.unsubscribe();
+    sub_points_.shutdown();
   }
-  else if (!sub_points_.getSubscriber())
+  else if (!sub_points_)
   {
-    sub_points_.subscribe(getNodeHandle(), "points", static_cast<std::uint32_t>(stage_->params().queue_size));
+    subscribePoints();
   }
+}
+
+void DynamicGridNodelet::subscribePoints()
+{
+  // Each cloud waits in the queue (at most ~queue_size) until the tf of its stamp is there;
+  // cloudCb or tfFailureCb follows.
+  sub_points_ = getNodeHandle().subscribe<sensor_msgs::PointCloud2>(
+      "points", static_cast<std::uint32_t>(stage_->params().queue_size),
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud) { tf_queue_->add(cloud); });
 }
 
 void DynamicGridNodelet::reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t /*level*/)
@@ -173,17 +187,14 @@ void DynamicGridNodelet::reconfigureCb(DynamicGridReconfigureConfig& reconfigure
   }
 }
 
-void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg,
-                                     tf2_ros::FilterFailureReason reason)
+void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg, TfWaitDrop reason)
 {
   {
     std::lock_guard<std::mutex> lock(filter_mutex_);
     ++tf_drops_;
   }
-  const char* why =
-      reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "the cloud has an empty frame_id"
-      : reason == tf2_ros::filter_failure_reasons::OutTheBack ? "the cloud is older than the tf buffer"
-                                                              : "no transform within the queue";
+  const char* why = reason == TfWaitDrop::kEmptyFrameId ? "the cloud has an empty frame_id"
+                                                        : "no transform within the queue";
   NODELET_WARN_THROTTLE(kThrottleS,
                         "dynamic_grid: dropping the scan of %s at t=%.3f: no tf %s <- '%s' at its stamp (%s)",
                         sub_points_.getTopic().c_str(), cloud_msg->header.stamp.toSec(), fixed_frame_.c_str(),

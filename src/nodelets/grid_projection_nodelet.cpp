@@ -1,7 +1,7 @@
 // grid_vision_fusion/grid_projection: DynamicGrid + CameraInfo (+ tf) -> ProjectedGrid, one per
 // camera_info, stamped like the image. Each camera_info waits (without blocking) in a
-// tf2_ros::MessageFilter until the tf of its stamp is there: a camera_info that arrives before
-// the /tf of the same stamp is projected as soon as that tf comes in.
+// TfWaitQueue until the tf of its stamp is there: a camera_info that arrives before the /tf of
+// the same stamp is projected as soon as that tf comes in (within one poll period).
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -10,7 +10,6 @@
 #include <sensor_msgs/image_encodings.h>
 #include <tf2/exceptions.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 #include <boost/thread/lock_guard.hpp>
 #include <boost/thread/mutex.hpp>
@@ -27,6 +26,7 @@
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
+#include "grid_vision_fusion/ros/tf_wait_queue.h"
 
 namespace grid_vision_fusion
 {
@@ -37,16 +37,16 @@ constexpr double kThrottleS = 5.0;
 
 class GridProjectionNodelet : public nodelet::Nodelet
 {
-  using TfFilter = tf2_ros::MessageFilter<sensor_msgs::CameraInfo>;
+  using TfQueue = TfWaitQueue<sensor_msgs::CameraInfo>;
 
   void onInit() override;
   void connectCb();
   void gridCb(const DynamicGrid::ConstPtr& grid_msg);
-  /// camera_info as received: handed to the tf filter once a grid (hence its frame) is known.
+  /// camera_info as received: handed to the tf queue once a grid (hence its frame) is known.
   void cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
   /// camera_info whose tf (camera <- grid frame, ground_frame) is available at its stamp.
   void cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
-  void tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, tf2_ros::FilterFailureReason reason);
+  void tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, TfWaitDrop reason);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
   /// Publishes the overlay of the cached image and projection with equal stamps, if any.
   void publishMatchedOverlay();
@@ -56,8 +56,9 @@ class GridProjectionNodelet : public nodelet::Nodelet
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<TfFilter> tf_filter_;
-  std::string tf_target_frame_;  // grid frame the tf filter waits for (guarded by grid_mutex_)
+  std::unique_ptr<TfQueue> tf_queue_;
+  ros::WallTimer tf_poll_timer_;
+  std::string tf_target_frame_;  // grid frame the tf queue waits for (guarded by grid_mutex_)
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   ros::Subscriber sub_grid_;
@@ -100,13 +101,14 @@ void GridProjectionNodelet::onInit()
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   // The target frames (grid frame, ground_frame) are set when the first grid arrives; no
-  // camera_info is handed to the filter before that.
-  tf_filter_ = std::make_unique<TfFilter>(*tf_buffer_, "", static_cast<std::uint32_t>(params.queue_size), nh);
-  tf_filter_->setTargetFrames({});
-  tf_filter_->registerCallback(
-      boost::bind(&GridProjectionNodelet::cameraInfoCb, this, boost::placeholders::_1));
-  tf_filter_->registerFailureCallback(boost::bind(&GridProjectionNodelet::tfFailureCb, this,
-                                                  boost::placeholders::_1, boost::placeholders::_2));
+  // camera_info is handed to the queue before that.
+  tf_queue_ = std::make_unique<TfQueue>(
+      *tf_buffer_, static_cast<std::size_t>(params.queue_size),
+      [this](const sensor_msgs::CameraInfo::ConstPtr& info) { cameraInfoCb(info); },
+      [this](const sensor_msgs::CameraInfo::ConstPtr& info, TfWaitDrop reason)
+      { tfFailureCb(info, reason); });
+  tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
+                                      [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);
@@ -149,7 +151,7 @@ void GridProjectionNodelet::connectCb()
   {
     sub_grid_.shutdown();
     sub_info_.shutdown();
-    tf_filter_->clear();
+    tf_queue_->clear();
     std::lock_guard<std::mutex> grid_lock(grid_mutex_);
     grid_.reset();
   }
@@ -194,7 +196,7 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
   if (grid_msg->header.frame_id != tf_target_frame_)
   {
     tf_target_frame_ = grid_msg->header.frame_id;
-    tf_filter_->setTargetFrames(stage_->tfFrames(tf_target_frame_));
+    tf_queue_->setTargetFrames(stage_->tfFrames(tf_target_frame_));
   }
 }
 
@@ -210,25 +212,22 @@ void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstP
       return;
     }
   }
-  // Waits in the filter's queue (at most ~queue_size messages) until the tf of its stamp is
-  // there; cameraInfoCb or tfFailureCb follows.
-  tf_filter_->add(info_msg);
+  // Waits in the queue (at most ~queue_size messages) until the tf of its stamp is there;
+  // cameraInfoCb or tfFailureCb follows.
+  tf_queue_->add(info_msg);
 }
 
-void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg,
-                                        tf2_ros::FilterFailureReason reason)
+void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, TfWaitDrop reason)
 {
-  const char* why = reason == tf2_ros::filter_failure_reasons::EmptyFrameID
+  const char* why = reason == TfWaitDrop::kEmptyFrameId
                         ? "the camera_info has an empty frame_id"
-                    : reason == tf2_ros::filter_failure_reasons::OutTheBack
-                        ? "its stamp is older than the tf buffer"
                         : "its tf did not arrive within ~queue_size camera_infos";
   NODELET_WARN_THROTTLE(
       kThrottleS,
       "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
       "(%s), nothing published",
       sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), info_msg->header.frame_id.c_str(),
-      tf_filter_->getTargetFramesString().c_str(), why);
+      tf_queue_->targetFramesString().c_str(), why);
 }
 
 void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)

@@ -1,0 +1,174 @@
+// Messages that wait for the tf of their stamp before a nodelet uses them.
+#pragma once
+
+#include <ros/time.h>
+#include <tf2/buffer_core.h>
+#include <boost/shared_ptr.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace grid_vision_fusion
+{
+/// How often the nodelets poll their TfWaitQueue [s]: the longest a message waits once its tf
+/// is there.
+constexpr double kTfWaitPollS = 0.02;
+
+/// Why TfWaitQueue gave a message up.
+enum class TfWaitDrop : std::uint8_t
+{
+  kEmptyFrameId = 0,  ///< the message names no frame
+  kQueueFull = 1,     ///< `capacity` newer messages arrived while its tf did not
+};
+
+/// The messages (with a std_msgs/Header `header`) waiting for the tf from their frame to every
+/// target frame at their stamp, in arrival order: what tf2_ros::MessageFilter does, without its
+/// lost wake-up. MessageFilter::add() registers a message's transform request with the buffer
+/// before it puts the message in its queue; a transform that arrives in between fires the
+/// request while the message is not there, and the message then waits until the queue
+/// overflows (tf2_ros 0.7, message_filter.h). This queue registers nothing: it asks the buffer
+/// (canTransform) when a message arrives and on every poll(), which its owner calls from a
+/// timer, so a message goes on at most one poll period after its tf has arrived.
+/// Thread-safe; `ready` and `dropped` are called one at a time, without the queue's lock held
+/// (they may call setTargetFrames(), targetFramesString(), size(), clear(), not add() or poll()).
+template <typename M>
+class TfWaitQueue
+{
+public:
+  using ConstPtr = boost::shared_ptr<const M>;
+  using Ready = std::function<void(const ConstPtr&)>;
+  using Dropped = std::function<void(const ConstPtr&, TfWaitDrop)>;
+
+  /// `capacity` >= 1 messages wait at most.
+  TfWaitQueue(const tf2::BufferCore& buffer, std::size_t capacity, Ready ready, Dropped dropped)
+      : buffer_(buffer),
+        capacity_(std::max<std::size_t>(capacity, 1)),
+        ready_(std::move(ready)),
+        dropped_(std::move(dropped))
+  {
+  }
+
+  /// The frames every message needs a tf to (none: every message goes on at once).
+  void setTargetFrames(std::vector<std::string> frames)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frames_ = std::move(frames);
+  }
+
+  /// The target frames joined by spaces, for messages.
+  std::string targetFramesString() const
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string joined;
+    for (const std::string& frame : frames_)
+    {
+      joined += (joined.empty() ? "" : " ") + frame;
+    }
+    return joined;
+  }
+
+  /// Passes `msg` on (with the queued ones whose tf has arrived meanwhile) when its tf is there,
+  /// queues it otherwise; the oldest waiting message is dropped when `capacity` wait already.
+  void add(const ConstPtr& msg)
+  {
+    std::lock_guard<std::mutex> serial(release_mutex_);
+    if (msg->header.frame_id.empty())
+    {
+      dropped_(msg, TfWaitDrop::kEmptyFrameId);
+      return;
+    }
+    ConstPtr overflow;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back(msg);
+      if (queue_.size() > capacity_)
+      {
+        overflow = queue_.front();
+        queue_.pop_front();
+      }
+    }
+    if (overflow)
+    {
+      dropped_(overflow, TfWaitDrop::kQueueFull);
+    }
+    release();
+  }
+
+  /// Passes on, in arrival order, every waiting message whose tf has arrived.
+  void poll()
+  {
+    std::lock_guard<std::mutex> serial(release_mutex_);
+    release();
+  }
+
+  /// Forgets the waiting messages (not reported as dropped).
+  void clear()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.clear();
+  }
+
+  /// Messages waiting.
+  std::size_t size() const
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return queue_.size();
+  }
+
+private:
+  /// Takes the messages whose tf is there out of the queue, then passes them on.
+  /// Under release_mutex_.
+  void release()
+  {
+    std::vector<ConstPtr> ready;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto it = queue_.begin(); it != queue_.end();)
+      {
+        if (transformable(**it))
+        {
+          ready.push_back(*it);
+          it = queue_.erase(it);
+        }
+        else
+        {
+          ++it;
+        }
+      }
+    }
+    for (const ConstPtr& msg : ready)
+    {
+      ready_(msg);
+    }
+  }
+
+  /// Under mutex_.
+  bool transformable(const M& msg) const
+  {
+    for (const std::string& frame : frames_)
+    {
+      if (!buffer_.canTransform(frame, msg.header.frame_id, msg.header.stamp))
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  const tf2::BufferCore& buffer_;
+  const std::size_t capacity_;
+  const Ready ready_;
+  const Dropped dropped_;
+  mutable std::mutex mutex_;  // queue_, frames_
+  std::mutex release_mutex_;  // one add() or poll() at a time: the callbacks in order
+  std::deque<ConstPtr> queue_;
+  std::vector<std::string> frames_;
+};
+
+}  // namespace grid_vision_fusion

@@ -1,0 +1,146 @@
+// TfWaitQueue without a master: a hand-fed tf2::BufferCore, camera_infos as the messages.
+#include <gtest/gtest.h>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <boost/make_shared.hpp>
+
+#include <atomic>
+#include <thread>
+
+#include "grid_vision_fusion/ros/tf_wait_queue.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+using Queue = TfWaitQueue<sensor_msgs::CameraInfo>;
+
+sensor_msgs::CameraInfo::ConstPtr info(double stamp_s, const std::string& frame = "camera")
+{
+  auto msg = boost::make_shared<sensor_msgs::CameraInfo>();
+  msg->header.stamp = ros::Time(stamp_s);
+  msg->header.frame_id = frame;
+  return msg;
+}
+
+void setTf(tf2::BufferCore& buffer, const std::string& parent, const std::string& child, double stamp_s)
+{
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = parent;
+  t.header.stamp = ros::Time(stamp_s);
+  t.child_frame_id = child;
+  t.transform.rotation.w = 1.0;
+  buffer.setTransform(t, "test");
+}
+
+/// A queue of `capacity` on `buffer` that records the stamps it passes on and drops.
+struct Recorder
+{
+  explicit Recorder(const tf2::BufferCore& buffer, std::size_t capacity = 3)
+      : queue(
+            buffer, capacity,
+            [this](const sensor_msgs::CameraInfo::ConstPtr& m) { ready.push_back(m->header.stamp.toSec()); },
+            [this](const sensor_msgs::CameraInfo::ConstPtr& m, TfWaitDrop why)
+            { dropped.emplace_back(m->header.stamp.toSec(), why); })
+  {
+    queue.setTargetFrames({"world"});
+  }
+  std::vector<double> ready;
+  std::vector<std::pair<double, TfWaitDrop>> dropped;
+  Queue queue;
+};
+}  // namespace
+
+TEST(TfWaitQueue, AMessageGoesOnOnceItsTfIsThereInArrivalOrder)
+{
+  tf2::BufferCore buffer;
+  setTf(buffer, "world", "camera", 10.0);
+  Recorder r(buffer);
+  r.queue.add(info(10.0));  // its tf is there
+  EXPECT_EQ(r.ready, (std::vector<double>{10.0}));
+  r.queue.add(info(10.1));  // not yet: extrapolation into the future
+  r.queue.add(info(10.2));
+  r.queue.poll();
+  EXPECT_EQ(r.ready.size(), 1U);
+  EXPECT_EQ(r.queue.size(), 2U);
+  setTf(buffer, "world", "camera", 10.2);
+  r.queue.poll();
+  EXPECT_EQ(r.ready, (std::vector<double>{10.0, 10.1, 10.2}));
+  EXPECT_EQ(r.queue.size(), 0U);
+  EXPECT_TRUE(r.dropped.empty());
+}
+
+TEST(TfWaitQueue, TheOldestIsDroppedWhenFullAndAnEmptyFrameAtOnce)
+{
+  tf2::BufferCore buffer;
+  Recorder r(buffer, 2);
+  r.queue.add(info(1.0));
+  r.queue.add(info(2.0));
+  r.queue.add(info(3.0));
+  ASSERT_EQ(r.dropped.size(), 1U);
+  EXPECT_EQ(r.dropped[0], std::make_pair(1.0, TfWaitDrop::kQueueFull));
+  r.queue.add(info(4.0, ""));
+  ASSERT_EQ(r.dropped.size(), 2U);
+  EXPECT_EQ(r.dropped[1], std::make_pair(4.0, TfWaitDrop::kEmptyFrameId));
+  EXPECT_EQ(r.queue.size(), 2U);
+  r.queue.clear();
+  EXPECT_EQ(r.queue.size(), 0U);
+  EXPECT_TRUE(r.ready.empty());
+}
+
+TEST(TfWaitQueue, NewTargetFramesApplyToTheWaitingMessages)
+{
+  // A camera_info queued while the grid was in a frame without a tf to the camera goes on once
+  // the grid's frame is one with a tf (tf2_ros::MessageFilter kept it waiting for the old one).
+  tf2::BufferCore buffer;
+  setTf(buffer, "world", "camera", 5.0);
+  Recorder r(buffer);
+  r.queue.setTargetFrames({"elsewhere"});
+  r.queue.add(info(5.0));
+  r.queue.poll();
+  EXPECT_TRUE(r.ready.empty());
+  EXPECT_EQ(r.queue.targetFramesString(), "elsewhere");
+  r.queue.setTargetFrames({"world", "camera"});
+  EXPECT_EQ(r.queue.targetFramesString(), "world camera");
+  r.queue.poll();
+  EXPECT_EQ(r.ready, (std::vector<double>{5.0}));
+  r.queue.setTargetFrames({});
+  r.queue.add(info(99.0, "nowhere"));  // no target frame: nothing to wait for
+  EXPECT_EQ(r.ready.back(), 99.0);
+}
+
+TEST(TfWaitQueue, NoMessageIsLostToATfArrivingWhileItIsAdded)
+{
+  // The race that loses tf2_ros::MessageFilter's messages: every tf arrives on another thread
+  // while its message is being added. Every message must come through, at the latest at the
+  // poll after its tf.
+  tf2::BufferCore buffer;
+  Recorder r(buffer, 1000);
+  constexpr int kMessages = 300;
+  std::atomic<int> added{0};
+  std::thread tf_thread(
+      [&]
+      {
+        for (int k = 0; k < kMessages; ++k)
+        {
+          while (added.load() < k)
+          {
+            std::this_thread::yield();
+          }
+          setTf(buffer, "world", "camera", 1.0 + 0.01 * k);
+        }
+      });
+  for (int k = 0; k < kMessages; ++k)
+  {
+    r.queue.add(info(1.0 + 0.01 * k));
+    added.store(k + 1);
+  }
+  tf_thread.join();
+  r.queue.poll();
+  EXPECT_EQ(r.ready.size(), static_cast<std::size_t>(kMessages));
+  EXPECT_EQ(r.queue.size(), 0U);
+  EXPECT_TRUE(r.dropped.empty());
+}
+
+}  // namespace grid_vision_fusion
