@@ -49,8 +49,9 @@ class DynamicGridNodelet : public nodelet::Nodelet
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<TfQueue> tf_queue_;  // the clouds waiting for their tf
-  ros::WallTimer tf_poll_timer_;       // (destroyed before the queue, the subscriber too)
+  std::unique_ptr<TfQueue> tf_queue_;        // the clouds waiting for their tf
+  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (destroyed first)
+  ros::WallTimer tf_poll_timer_;             // (destroyed before the queue, the subscriber too)
   ros::Subscriber sub_points_;
 
   ros::Publisher pub_grid_;
@@ -109,6 +110,8 @@ void DynamicGridNodelet::onInit()
       [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, TfWaitDrop reason)
       { tfFailureCb(cloud, reason); });
   tf_queue_->setTargetFrames({fixed_frame_});
+  tf_wakeup_ =
+      std::make_unique<TfWaitWakeup>(*tf_buffer_, *nh.getCallbackQueue(), [this] { tf_queue_->poll(); });
   tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
                                       [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
 

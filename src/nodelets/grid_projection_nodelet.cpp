@@ -57,6 +57,7 @@ class GridProjectionNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<TfQueue> tf_queue_;
+  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (destroyed first)
   ros::WallTimer tf_poll_timer_;
   std::string tf_target_frame_;  // grid frame the tf queue waits for (guarded by grid_mutex_)
 
@@ -107,6 +108,8 @@ void GridProjectionNodelet::onInit()
       [this](const sensor_msgs::CameraInfo::ConstPtr& info) { cameraInfoCb(info); },
       [this](const sensor_msgs::CameraInfo::ConstPtr& info, TfWaitDrop reason)
       { tfFailureCb(info, reason); });
+  tf_wakeup_ =
+      std::make_unique<TfWaitWakeup>(*tf_buffer_, *nh.getCallbackQueue(), [this] { tf_queue_->poll(); });
   tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
                                       [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
 

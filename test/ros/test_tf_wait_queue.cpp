@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <geometry_msgs/TransformStamped.h>
+#include <ros/callback_queue.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <boost/make_shared.hpp>
 
@@ -141,6 +142,29 @@ TEST(TfWaitQueue, NoMessageIsLostToATfArrivingWhileItIsAdded)
   EXPECT_EQ(r.ready.size(), static_cast<std::size_t>(kMessages));
   EXPECT_EQ(r.queue.size(), 0U);
   EXPECT_TRUE(r.dropped.empty());
+}
+
+TEST(TfWaitQueue, TheWakeupPollsOnTheCallbackQueueWhenATransformArrives)
+{
+  // A message waiting for its tf goes on from the callback queue as soon as the tf arrives,
+  // without waiting for a timer; one poll is pending at most however many transforms come.
+  tf2::BufferCore buffer;
+  Recorder r(buffer);
+  ros::CallbackQueue callbacks;
+  {
+    TfWaitWakeup wakeup(buffer, callbacks, [&] { r.queue.poll(); });
+    r.queue.add(info(7.0));
+    EXPECT_TRUE(callbacks.empty());
+    setTf(buffer, "world", "camera", 6.9);
+    setTf(buffer, "world", "camera", 7.0);
+    EXPECT_TRUE(r.ready.empty()) << "the poll runs on the callback queue, not in the tf thread";
+    callbacks.callAvailable();
+    EXPECT_EQ(r.ready, (std::vector<double>{7.0}));
+    EXPECT_TRUE(callbacks.empty());
+    setTf(buffer, "world", "camera", 7.1);
+    EXPECT_FALSE(callbacks.empty());
+  }
+  EXPECT_TRUE(callbacks.empty()) << "the wakeup removes its pending poll when it goes";
 }
 
 }  // namespace grid_vision_fusion

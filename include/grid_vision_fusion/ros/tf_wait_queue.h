@@ -1,11 +1,14 @@
 // Messages that wait for the tf of their stamp before a nodelet uses them.
 #pragma once
 
+#include <ros/callback_queue_interface.h>
 #include <ros/time.h>
 #include <tf2/buffer_core.h>
+#include <boost/make_shared.hpp>
 #include <boost/shared_ptr.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -16,9 +19,8 @@
 
 namespace grid_vision_fusion
 {
-/// How often the nodelets poll their TfWaitQueue [s]: the longest a message waits once its tf
-/// is there.
-constexpr double kTfWaitPollS = 0.02;
+/// How often the nodelets poll their TfWaitQueue besides TfWaitWakeup's polls [s].
+constexpr double kTfWaitPollS = 0.1;
 
 /// Why TfWaitQueue gave a message up.
 enum class TfWaitDrop : std::uint8_t
@@ -33,8 +35,8 @@ enum class TfWaitDrop : std::uint8_t
 /// before it puts the message in its queue; a transform that arrives in between fires the
 /// request while the message is not there, and the message then waits until the queue
 /// overflows (tf2_ros 0.7, message_filter.h). This queue registers nothing: it asks the buffer
-/// (canTransform) when a message arrives and on every poll(), which its owner calls from a
-/// timer, so a message goes on at most one poll period after its tf has arrived.
+/// (canTransform) when a message arrives and on every poll(), which its owner calls when the
+/// buffer receives transforms (TfWaitWakeup) and from a timer.
 /// Thread-safe; `ready` and `dropped` are called one at a time, without the queue's lock held
 /// (they may call setTargetFrames(), targetFramesString(), size(), clear(), not add() or poll()).
 template <typename M>
@@ -169,6 +171,55 @@ private:
   std::mutex release_mutex_;  // one add() or poll() at a time: the callbacks in order
   std::deque<ConstPtr> queue_;
   std::vector<std::string> frames_;
+};
+
+/// Calls `poll` on `callbacks` (a node's callback queue: where tf2_ros::MessageFilter hands its
+/// ready messages too) each time `buffer` receives transforms, one call pending at a most.
+class TfWaitWakeup
+{
+public:
+  TfWaitWakeup(tf2::BufferCore& buffer, ros::CallbackQueueInterface& callbacks, std::function<void()> poll)
+      : buffer_(buffer), callbacks_(callbacks), poll_(std::move(poll))
+  {
+    connection_ = buffer_._addTransformsChangedListener([this] { wake(); });
+  }
+  ~TfWaitWakeup()
+  {
+    buffer_._removeTransformsChangedListener(connection_);
+    callbacks_.removeByID(reinterpret_cast<std::uint64_t>(this));
+  }
+  TfWaitWakeup(const TfWaitWakeup&) = delete;
+  TfWaitWakeup& operator=(const TfWaitWakeup&) = delete;
+
+private:
+  class PollCallback : public ros::CallbackInterface
+  {
+  public:
+    explicit PollCallback(TfWaitWakeup& owner) : owner_(owner) {}
+    CallResult call() override
+    {
+      owner_.pending_.store(false);
+      owner_.poll_();
+      return Success;
+    }
+
+  private:
+    TfWaitWakeup& owner_;
+  };
+
+  void wake()
+  {
+    if (!pending_.exchange(true))
+    {
+      callbacks_.addCallback(boost::make_shared<PollCallback>(*this), reinterpret_cast<std::uint64_t>(this));
+    }
+  }
+
+  tf2::BufferCore& buffer_;
+  ros::CallbackQueueInterface& callbacks_;
+  const std::function<void()> poll_;
+  std::atomic<bool> pending_{false};
+  boost::signals2::connection connection_;
 };
 
 }  // namespace grid_vision_fusion
