@@ -49,9 +49,11 @@ class DynamicGridNodelet : public nodelet::Nodelet
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<TfQueue> tf_queue_;        // the clouds waiting for their tf
-  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (destroyed first)
-  ros::WallTimer tf_poll_timer_;             // (destroyed before the queue, the subscriber too)
+  // The clouds waiting for their tf; what calls into the queue is declared after it (destroyed
+  // before it).
+  std::unique_ptr<TfQueue> tf_queue_;
+  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives
+  ros::WallTimer tf_poll_timer_;
   ros::Subscriber sub_points_;
 
   ros::Publisher pub_grid_;

@@ -1,7 +1,7 @@
 // grid_vision_fusion/grid_projection: DynamicGrid + CameraInfo (+ tf) -> ProjectedGrid, one per
 // camera_info, stamped like the image. Each camera_info waits (without blocking) in a
 // TfWaitQueue until the tf of its stamp is there: a camera_info that arrives before the /tf of
-// the same stamp is projected as soon as that tf comes in (within one poll period).
+// the same stamp is projected as soon as that tf comes in.
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -57,7 +57,7 @@ class GridProjectionNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<TfQueue> tf_queue_;
-  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (destroyed first)
+  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (declared after it)
   ros::WallTimer tf_poll_timer_;
   std::string tf_target_frame_;  // grid frame the tf queue waits for (guarded by grid_mutex_)
 
