@@ -174,7 +174,7 @@ private:
 };
 
 /// Calls `poll` on `callbacks` (a node's callback queue: where tf2_ros::MessageFilter hands its
-/// ready messages too) each time `buffer` receives transforms, one call pending at a most.
+/// ready messages too) each time `buffer` receives transforms, one call pending at most.
 class TfWaitWakeup
 {
 public:
