@@ -71,12 +71,13 @@ struct ProjectedPointsView
   const float* vy = nullptr;            ///< cell velocity y [m/s], grid frame
   const std::uint8_t* state = nullptr;  ///< CellState values
   /// Scans since each point's cell last held obstacle points (0: the grid's scan); optional
-  /// (nullptr: every point counts as seen in the grid's scan). pointsViewOf() leaves it unset.
+  /// (nullptr: every point counts as seen in the grid's scan).
   const std::uint8_t* scans_since_hit = nullptr;
 };
 
 /// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and
-/// state (uint8 vector) of equal length, e.g. ProjectedPoints or a ProjectedGrid message.
+/// state (uint8 vector) of equal length, and scans_since_hit (uint8 vector, optional: empty or
+/// of that length), e.g. ProjectedPoints or a ProjectedGrid message.
 template <typename PointArrays>
 ProjectedPointsView pointsViewOf(const PointArrays& arrays)
 {
@@ -89,6 +90,10 @@ ProjectedPointsView pointsViewOf(const PointArrays& arrays)
   view.vx = arrays.vx.data();
   view.vy = arrays.vy.data();
   view.state = arrays.state.data();
+  if (arrays.scans_since_hit.size() == view.size && view.size > 0)
+  {
+    view.scans_since_hit = arrays.scans_since_hit.data();
+  }
   return view;
 }
 

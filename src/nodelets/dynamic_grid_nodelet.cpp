@@ -52,8 +52,7 @@ class DynamicGridNodelet : public nodelet::Nodelet
   // The clouds waiting for their tf; what calls into the queue is declared after it (destroyed
   // before it).
   std::unique_ptr<TfQueue> tf_queue_;
-  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives
-  ros::WallTimer tf_poll_timer_;
+  std::unique_ptr<TfWaitPolling> tf_polling_;
   ros::Subscriber sub_points_;
 
   ros::Publisher pub_grid_;
@@ -112,10 +111,7 @@ void DynamicGridNodelet::onInit()
       [this](const sensor_msgs::PointCloud2::ConstPtr& cloud, TfWaitDrop reason)
       { tfFailureCb(cloud, reason); });
   tf_queue_->setTargetFrames({fixed_frame_});
-  tf_wakeup_ =
-      std::make_unique<TfWaitWakeup>(*tf_buffer_, *nh.getCallbackQueue(), [this] { tf_queue_->poll(); });
-  tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
-                                      [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
+  tf_polling_ = std::make_unique<TfWaitPolling>(*tf_buffer_, nh, [this] { tf_queue_->poll(); });
 
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   updater_->setHardwareID("none");

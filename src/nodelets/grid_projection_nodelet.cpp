@@ -57,9 +57,8 @@ class GridProjectionNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<TfQueue> tf_queue_;
-  std::unique_ptr<TfWaitWakeup> tf_wakeup_;  // polls the queue when tf arrives (declared after it)
-  ros::WallTimer tf_poll_timer_;
-  std::string tf_target_frame_;  // grid frame the tf queue waits for (guarded by grid_mutex_)
+  std::unique_ptr<TfWaitPolling> tf_polling_;  // declared after the queue it polls
+  std::string tf_target_frame_;                // grid frame the tf queue waits for (guarded by grid_mutex_)
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   ros::Subscriber sub_grid_;
@@ -108,10 +107,7 @@ void GridProjectionNodelet::onInit()
       [this](const sensor_msgs::CameraInfo::ConstPtr& info) { cameraInfoCb(info); },
       [this](const sensor_msgs::CameraInfo::ConstPtr& info, TfWaitDrop reason)
       { tfFailureCb(info, reason); });
-  tf_wakeup_ =
-      std::make_unique<TfWaitWakeup>(*tf_buffer_, *nh.getCallbackQueue(), [this] { tf_queue_->poll(); });
-  tf_poll_timer_ = nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
-                                      [this](const ros::WallTimerEvent&) { tf_queue_->poll(); });
+  tf_polling_ = std::make_unique<TfWaitPolling>(*tf_buffer_, nh, [this] { tf_queue_->poll(); });
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
   ros::SubscriberStatusCallback connect_cb = boost::bind(&GridProjectionNodelet::connectCb, this);

@@ -119,12 +119,7 @@ void ProjectedCells::reserve(std::size_t points)
 
 ProjectedPointsView ProjectedCells::view() const
 {
-  ProjectedPointsView view = pointsViewOf(*this);
-  if (scans_since_hit.size() == view.size)
-  {
-    view.scans_since_hit = scans_since_hit.data();
-  }
-  return view;
+  return pointsViewOf(*this);
 }
 
 ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,

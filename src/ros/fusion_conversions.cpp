@@ -88,12 +88,7 @@ std::string checkProjectedGrid(const ProjectedGrid& msg)
 
 ProjectedPointsView viewOf(const ProjectedGrid& msg)
 {
-  ProjectedPointsView view = pointsViewOf(msg);
-  if (msg.scans_since_hit.size() == view.size)  // optional
-  {
-    view.scans_since_hit = msg.scans_since_hit.data();
-  }
-  return view;
+  return pointsViewOf(msg);
 }
 
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,

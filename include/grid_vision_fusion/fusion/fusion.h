@@ -87,6 +87,9 @@ struct ProjectedPoints
 {
   std::vector<float> u, v, x, y, vx, vy;
   std::vector<std::uint8_t> state;
+  /// Scans since each point's cell last held obstacle points; optional (empty: none given,
+  /// add() leaves it so).
+  std::vector<std::uint8_t> scans_since_hit;
 
   /// Appends one point.
   void add(float pu, float pv, float px, float py, float pvx, float pvy, CellState s);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <ros/callback_queue_interface.h>
+#include <ros/node_handle.h>
 #include <ros/time.h>
 #include <tf2/buffer_core.h>
 #include <boost/make_shared.hpp>
@@ -19,7 +20,7 @@
 
 namespace grid_vision_fusion
 {
-/// How often the nodelets poll their TfWaitQueue besides TfWaitWakeup's polls [s].
+/// How often TfWaitPolling polls besides TfWaitWakeup's polls [s].
 constexpr double kTfWaitPollS = 0.1;
 
 /// Why TfWaitQueue gave a message up.
@@ -36,7 +37,7 @@ enum class TfWaitDrop : std::uint8_t
 /// request while the message is not there, and the message then waits until the queue
 /// overflows (tf2_ros 0.7, message_filter.h). This queue registers nothing: it asks the buffer
 /// (canTransform) when a message arrives and on every poll(), which its owner calls when the
-/// buffer receives transforms (TfWaitWakeup) and from a timer.
+/// buffer receives transforms and from a timer (TfWaitPolling).
 /// Thread-safe; `ready` and `dropped` are called one at a time, without the queue's lock held
 /// (they may call setTargetFrames(), targetFramesString(), size(), clear(), not add() or poll()).
 template <typename M>
@@ -220,6 +221,24 @@ private:
   const std::function<void()> poll_;
   std::atomic<bool> pending_{false};
   boost::signals2::connection connection_;
+};
+
+/// What polls a nodelet's TfWaitQueue: TfWaitWakeup on the node's callback queue whenever tf
+/// arrives, and a wall timer every kTfWaitPollS, for the messages whose tf was there already
+/// when the target frames changed. Declare it after the queue (it is destroyed first).
+class TfWaitPolling
+{
+public:
+  TfWaitPolling(tf2::BufferCore& buffer, ros::NodeHandle& nh, const std::function<void()>& poll)
+      : wakeup_(buffer, *nh.getCallbackQueue(), poll),
+        timer_(nh.createWallTimer(ros::WallDuration(kTfWaitPollS),
+                                  [poll](const ros::WallTimerEvent&) { poll(); }))
+  {
+  }
+
+private:
+  TfWaitWakeup wakeup_;
+  ros::WallTimer timer_;
 };
 
 }  // namespace grid_vision_fusion
