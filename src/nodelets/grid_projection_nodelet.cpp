@@ -1,16 +1,19 @@
 // grid_vision_fusion/grid_projection: DynamicGrid + CameraInfo (+ tf) -> ProjectedGrid, one per
-// camera_info, stamped like the image. Each camera_info waits (without blocking) in a
-// TfWaitQueue until the tf of its stamp is there: a camera_info that arrives before the /tf of
-// the same stamp is projected as soon as that tf comes in.
+// camera_info, stamped like the image. Each camera_info first waits (without blocking) for the
+// grid of its own sweep (GridForImage), then in a TfWaitQueue until the tf of its stamp is
+// there: a camera_info that arrives before its grid or before the /tf of the same stamp is
+// projected as soon as they come in.
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/image_encodings.h>
+#include <std_msgs/Header.h>
 #include <tf2/exceptions.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/make_shared.hpp>
 #include <boost/thread/lock_guard.hpp>
 #include <boost/thread/mutex.hpp>
 #include <pluginlib/class_list_macros.hpp>
@@ -18,11 +21,14 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
+#include "grid_vision_fusion/ros/grid_for_image.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/projection_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
@@ -33,20 +39,34 @@ namespace grid_vision_fusion
 namespace
 {
 constexpr double kThrottleS = 5.0;
+
+/// A camera_info with the grid it is projected with; it waits in the tf queue for the tf from
+/// the camera_info's frame (`header`, the camera_info's) to `frames` (the grid frame and
+/// ground_frame) at its stamp.
+struct ProjectionRequest
+{
+  std_msgs::Header header;
+  sensor_msgs::CameraInfo::ConstPtr info;
+  DynamicGrid::ConstPtr grid;
+  std::vector<std::string> frames;
+};
 }  // namespace
 
 class GridProjectionNodelet : public nodelet::Nodelet
 {
-  using TfQueue = TfWaitQueue<sensor_msgs::CameraInfo>;
+  using Pairing = GridForImage<DynamicGrid, sensor_msgs::CameraInfo>;
+  using TfQueue = TfWaitQueue<ProjectionRequest>;
 
   void onInit() override;
   void connectCb();
   void gridCb(const DynamicGrid::ConstPtr& grid_msg);
-  /// camera_info as received: handed to the tf queue once a grid (hence its frame) is known.
+  /// camera_info as received: waits in pairing_ for the grid of its sweep.
   void cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
-  /// camera_info whose tf (camera <- grid frame, ground_frame) is available at its stamp.
-  void cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg);
-  void tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, TfWaitDrop reason);
+  /// Hands camera_infos paired with their grid to the tf queue.
+  void queuePairs(const std::vector<Pairing::Pair>& pairs);
+  /// A camera_info whose tf (camera <- grid frame, ground_frame) is available at its stamp.
+  void project(const boost::shared_ptr<const ProjectionRequest>& request);
+  void tfFailureCb(const boost::shared_ptr<const ProjectionRequest>& request, TfWaitDrop reason);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
   /// Publishes the overlay of the cached image and projection with equal stamps, if any.
   void publishMatchedOverlay();
@@ -58,15 +78,12 @@ class GridProjectionNodelet : public nodelet::Nodelet
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<TfQueue> tf_queue_;
   std::unique_ptr<TfWaitPolling> tf_polling_;  // declared after the queue it polls
-  std::string tf_target_frame_;                // grid frame the tf queue waits for (guarded by grid_mutex_)
+  std::unique_ptr<Pairing> pairing_;
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   ros::Subscriber sub_grid_;
   ros::Subscriber sub_info_;
   image_transport::Subscriber sub_image_;
-
-  std::mutex grid_mutex_;
-  DynamicGrid::ConstPtr grid_;
 
   std::mutex overlay_mutex_;
   std::deque<sensor_msgs::Image::ConstPtr> images_;
@@ -100,13 +117,13 @@ void GridProjectionNodelet::onInit()
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-  // The target frames (grid frame, ground_frame) are set when the first grid arrives; no
-  // camera_info is handed to the queue before that.
+  pairing_ = std::make_unique<Pairing>(params.grid_sync_tolerance);
   tf_queue_ = std::make_unique<TfQueue>(
       *tf_buffer_, static_cast<std::size_t>(params.queue_size),
-      [this](const sensor_msgs::CameraInfo::ConstPtr& info) { cameraInfoCb(info); },
-      [this](const sensor_msgs::CameraInfo::ConstPtr& info, TfWaitDrop reason)
-      { tfFailureCb(info, reason); });
+      [this](const boost::shared_ptr<const ProjectionRequest>& request) { project(request); },
+      [this](const boost::shared_ptr<const ProjectionRequest>& request, TfWaitDrop reason)
+      { tfFailureCb(request, reason); },
+      [](const ProjectionRequest& request) { return request.frames; });
   tf_polling_ = std::make_unique<TfWaitPolling>(*tf_buffer_, nh, [this] { tf_queue_->poll(); });
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
@@ -127,12 +144,12 @@ void GridProjectionNodelet::onInit()
   }
   NODELET_INFO(
       "grid_projection: occupied >= %.2f, dynamic when P(D) > %.2f (P(S)+P(D)), ground %.2f m %s%s, "
-      "%s, prediction to the image stamp %s, max grid age %.2f s, %s",
+      "%s, prediction to the image stamp %s, max grid age %.2f s, grid sync tolerance %.3f s%s, %s",
       config.occupied_threshold, config.dynamic_ratio, params.ground_height,
       params.ground_frame.empty() ? "in the grid frame" : "below/above the origin of ",
       params.ground_frame.c_str(), config.column_mode ? "column mode" : "ground points only",
-      config.predict_to_image_stamp ? "on" : "off", params.max_grid_age,
-      params.lazy ? "lazy" : "always subscribed");
+      config.predict_to_image_stamp ? "on" : "off", params.max_grid_age, params.grid_sync_tolerance,
+      params.grid_sync_tolerance < 0.0 ? " (no waiting)" : "", params.lazy ? "lazy" : "always subscribed");
 }
 
 void GridProjectionNodelet::connectCb()
@@ -151,8 +168,7 @@ void GridProjectionNodelet::connectCb()
     sub_grid_.shutdown();
     sub_info_.shutdown();
     tf_queue_->clear();
-    std::lock_guard<std::mutex> grid_lock(grid_mutex_);
-    grid_.reset();
+    pairing_->clear();
   }
   else if (!sub_grid_)
   {
@@ -184,40 +200,43 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
                           grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(), error.c_str());
     return;
   }
-  std::lock_guard<std::mutex> lock(grid_mutex_);
-  if (grid_ && grid_msg->header.stamp < grid_->header.stamp)
+  const DynamicGrid::ConstPtr newest = pairing_->newestGrid();
+  if (newest && grid_msg->header.stamp < newest->header.stamp)
   {
     NODELET_WARN_THROTTLE(
         kThrottleS, "grid_projection: time jumped backwards on %s (%.3f after %.3f): grid replaced",
-        sub_grid_.getTopic().c_str(), grid_msg->header.stamp.toSec(), grid_->header.stamp.toSec());
+        sub_grid_.getTopic().c_str(), grid_msg->header.stamp.toSec(), newest->header.stamp.toSec());
   }
-  grid_ = grid_msg;
-  if (grid_msg->header.frame_id != tf_target_frame_)
-  {
-    tf_target_frame_ = grid_msg->header.frame_id;
-    tf_queue_->setTargetFrames(stage_->tfFrames(tf_target_frame_));
-  }
+  queuePairs(pairing_->addGrid(grid_msg));
 }
 
 void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
 {
+  queuePairs(pairing_->addInfo(info_msg));
+}
+
+void GridProjectionNodelet::queuePairs(const std::vector<Pairing::Pair>& pairs)
+{
+  for (const Pairing::Pair& pair : pairs)
   {
-    std::lock_guard<std::mutex> lock(grid_mutex_);
-    if (!grid_)
+    if (!pair.grid)
     {
       NODELET_WARN_THROTTLE(kThrottleS,
                             "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
-                            info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
-      return;
+                            pair.info->header.stamp.toSec(), sub_grid_.getTopic().c_str());
+      continue;
     }
+    // Waits in the queue (at most ~queue_size requests) until the tf of its stamp is there;
+    // project or tfFailureCb follows.
+    tf_queue_->add(boost::make_shared<const ProjectionRequest>(ProjectionRequest{
+        pair.info->header, pair.info, pair.grid, stage_->tfFrames(pair.grid->header.frame_id)}));
   }
-  // Waits in the queue (at most ~queue_size messages) until the tf of its stamp is there;
-  // cameraInfoCb or tfFailureCb follows.
-  tf_queue_->add(info_msg);
 }
 
-void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg, TfWaitDrop reason)
+void GridProjectionNodelet::tfFailureCb(const boost::shared_ptr<const ProjectionRequest>& request,
+                                        TfWaitDrop reason)
 {
+  const sensor_msgs::CameraInfo::ConstPtr& info_msg = request->info;
   const char* why = reason == TfWaitDrop::kEmptyFrameId
                         ? "the camera_info has an empty frame_id"
                         : "its tf did not arrive within ~queue_size camera_infos";
@@ -226,27 +245,18 @@ void GridProjectionNodelet::tfFailureCb(const sensor_msgs::CameraInfo::ConstPtr&
       "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
       "(%s), nothing published",
       sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), info_msg->header.frame_id.c_str(),
-      tf_queue_->targetFramesString().c_str(), why);
+      joinFrames(request->frames).c_str(), why);
 }
 
-void GridProjectionNodelet::cameraInfoCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
+void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequest>& request)
 {
-  DynamicGrid::ConstPtr grid;
-  {
-    std::lock_guard<std::mutex> lock(grid_mutex_);
-    grid = grid_;
-  }
-  if (!grid)
-  {
-    NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
-                          info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
-    return;
-  }
+  const DynamicGrid& grid = *request->grid;
+  const sensor_msgs::CameraInfo::ConstPtr& info_msg = request->info;
   ProjectedGrid::Ptr projected;
   std::size_t invalid_cells = 0;
   try
   {
-    projected = stage_->project(*grid, *info_msg, *tf_buffer_, &invalid_cells);
+    projected = stage_->project(grid, *info_msg, *tf_buffer_, &invalid_cells);
   }
   catch (const ProjectionSkipped& e)
   {

@@ -171,6 +171,8 @@ GridProjectionParams GridProjectionParams::fromParams(const ParamSource& source,
   require(std::isfinite(p.ground_height), source, "ground_height", "must be finite");
   require(std::isfinite(p.max_grid_age) && p.max_grid_age > 0.0, source, "max_grid_age",
           "must be finite and > 0 s, got " + std::to_string(p.max_grid_age));
+  require(std::isfinite(p.grid_sync_tolerance), source, "grid_sync_tolerance",
+          "must be finite (< 0: no waiting), got " + std::to_string(p.grid_sync_tolerance));
   require(p.image_cache_size >= 1, source, "image_cache_size",
           "must be >= 1, got " + std::to_string(p.image_cache_size));
   require(p.queue_size >= 1, source, "queue_size", "must be >= 1, got " + std::to_string(p.queue_size));

@@ -420,8 +420,11 @@ std::function<void(Bench&)> badInfo(const std::function<void(sensor_msgs::Camera
 {
   return [spoil](Bench& b)
   {
-    auto info = makeInfo(b.next("grid_projection"));
+    // With the grid of its sweep (without it, the camera_info would wait for it).
+    const ros::Time stamp = b.next("grid_projection");
+    auto info = makeInfo(stamp);
     spoil(*info);
+    b.pub_grid_.publish(makeGrid(stamp));
     b.pub_info_.publish(info);
   };
 }
@@ -597,9 +600,16 @@ std::vector<Case> cases()
       {"GridTooOld", "grid_projection",
        [](Bench& b)
        {
+         // The lidar falls silent: each camera_info waits for the grid of its sweep until the
+         // next one comes, then takes the last grid, 30 s old. The lidar comes back for the last.
          const ros::Time stamp = b.next("grid_projection");
+         const ros::Time back = stamp + ros::Duration(30.1);
          b.pub_grid_.publish(makeGrid(stamp));
          b.pub_info_.publish(makeInfo(stamp + ros::Duration(30.0)));
+         b.pub_info_.publish(makeInfo(back));
+         b.setClock("grid_projection", back);
+         b.bad_outputs_.insert(back);
+         b.pub_grid_.publish(makeGrid(back));
        },
        "more than max_grid_age", "projection/skipped"},
       {"ModelFileReplacedWhileRunning", "yolo_detector",
@@ -634,6 +644,18 @@ std::vector<Case> cases()
          b.pub_projected_.publish(makeProjected(stamp));
        },
        "fusion: tracks reset at t=", "fusion/reset"},
+      {"GridTimeGoesBackwards", "grid_projection",
+       [](Bench& b)
+       {
+         const ros::Time stamp = b.next("grid_projection") - ros::Duration(30.0);
+         b.setClock("grid_projection", stamp);
+         b.bad_outputs_.insert(stamp);
+         b.pub_grid_.publish(makeGrid(stamp));
+         // Again until projected: a camera_info that overtakes the grid goes with the old ones.
+         waitFor([&] { return b.output("grid_projection", stamp); }, kOutputTimeoutS,
+                 [&] { b.pub_info_.publish(makeInfo(stamp)); });
+       },
+       "grid_projection: time jumped backwards on", ""},
       {"CameraInfoBeforeItsTf", "grid_projection",
        [](Bench& b)
        {

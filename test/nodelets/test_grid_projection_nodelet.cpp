@@ -328,6 +328,59 @@ TEST_F(GridProjectionNodeletTest, CameraInfoBeforeItsTfWaitsAndIsProjected)
   EXPECT_NEAR(projected.front()->v[1], a[1], kPixelTolerance);
 }
 
+TEST_F(GridProjectionNodeletTest, CameraInfoBeforeTheGridOfItsSweepWaitsForIt)
+{
+  // Live (or a bag played at its rate) the image of a sweep arrives while the grid of that sweep
+  // is still being computed: it must be projected with that grid, not with the previous sweep's.
+  subscribeProjected();
+  const ros::Time stamp(1317000400, 0);
+  const auto previous = makeGrid(stamp - ros::Duration(0.1));
+  ASSERT_TRUE(projectUntilReceived(previous, makeInfo(stamp - ros::Duration(0.1))));
+  const auto projected_at = [this](const ros::Time& t)
+  {
+    std::vector<ProjectedGrid::ConstPtr> out;
+    for (const auto& msg : received_)
+    {
+      if (msg->header.stamp == t)
+      {
+        out.push_back(msg);
+      }
+    }
+    return out;
+  };
+  pub_info_.publish(makeInfo(stamp));
+  ros::WallDuration(0.5).sleep();
+  ros::spinOnce();
+  EXPECT_TRUE(projected_at(stamp).empty()) << "projected with the previous sweep's grid";
+  auto own = makeGrid(stamp);
+  own->vx[0] = 0.5F;  // tells the grids apart in a failure message
+  ASSERT_TRUE(waitFor([&] { return !projected_at(stamp).empty(); }, 10.0,
+                      [&]
+                      {
+                        pub_grid_.publish(own);
+                        ros::WallDuration(0.05).sleep();
+                      }))
+      << "the camera_info waiting for its grid was never projected";
+  EXPECT_EQ(projected_at(stamp).front()->grid_stamp, stamp);
+
+  // The lidar stops: the next camera_info ends the wait, and the waiting one is projected with
+  // the newest grid there is (moved to its stamp).
+  const ros::Time late = stamp + ros::Duration(0.1);
+  const ros::Time next = stamp + ros::Duration(0.2);
+  pub_info_.publish(makeInfo(late));
+  ros::WallDuration(0.3).sleep();
+  ros::spinOnce();
+  EXPECT_TRUE(projected_at(late).empty()) << "did not wait for the grid of its sweep";
+  ASSERT_TRUE(waitFor([&] { return !projected_at(late).empty(); }, 10.0,
+                      [&]
+                      {
+                        pub_info_.publish(makeInfo(next));
+                        ros::WallDuration(0.05).sleep();
+                      }))
+      << "the next camera_info did not end the wait";
+  EXPECT_EQ(projected_at(late).front()->grid_stamp, stamp);
+}
+
 TEST_F(GridProjectionNodeletTest, OverlayShowsStaticBlueAndDynamicGreen)
 {
   std::vector<sensor_msgs::Image::ConstPtr> overlays;

@@ -111,6 +111,29 @@ TEST(TfWaitQueue, NewTargetFramesApplyToTheWaitingMessages)
   EXPECT_EQ(r.ready.back(), 99.0);
 }
 
+TEST(TfWaitQueue, EachMessageCanWaitForItsOwnFrames)
+{
+  // The grid projection's requests: each waits for the tf to the frame of its own grid.
+  tf2::BufferCore buffer;
+  setTf(buffer, "world", "camera", 5.0);
+  std::vector<std::string> ready;
+  Queue queue(
+      buffer, 3, [&](const sensor_msgs::CameraInfo::ConstPtr& m) { ready.push_back(m->distortion_model); },
+      [](const sensor_msgs::CameraInfo::ConstPtr&, TfWaitDrop) {},
+      [](const sensor_msgs::CameraInfo& m) { return std::vector<std::string>{m.distortion_model}; });
+  auto to_elsewhere = boost::make_shared<sensor_msgs::CameraInfo>(*info(5.0));
+  to_elsewhere->distortion_model = "elsewhere";  // stands for the message's target frame
+  auto to_world = boost::make_shared<sensor_msgs::CameraInfo>(*info(5.0));
+  to_world->distortion_model = "world";
+  queue.add(to_elsewhere);
+  queue.add(to_world);
+  EXPECT_EQ(ready, (std::vector<std::string>{"world"}));
+  EXPECT_EQ(queue.size(), 1U);
+  setTf(buffer, "world", "elsewhere", 5.0);
+  queue.poll();
+  EXPECT_EQ(ready, (std::vector<std::string>{"world", "elsewhere"}));
+}
+
 TEST(TfWaitQueue, NoMessageIsLostToATfArrivingWhileItIsAdded)
 {
   // The race that loses tf2_ros::MessageFilter's messages: every tf arrives on another thread

@@ -174,8 +174,11 @@ struct GridProjectionParams
   std::string ground_frame = "velo_link";
   double ground_height = -1.73;  ///< [m], finite
   double max_grid_age = 0.5;     ///< largest |t_image − t_grid| projected [s] (> 0)
-  int image_cache_size = 5;      ///< images kept for the overlay (>= 1)
-  int queue_size = 5;            ///< camera_infos waiting for their tf (>= 1)
+  /// A camera_info waits for a grid stamped at most this before it (its own sweep's) [s],
+  /// finite; < 0: never waits, the newest grid at once (GridForImage).
+  double grid_sync_tolerance = 0.05;
+  int image_cache_size = 5;  ///< images kept for the overlay (>= 1)
+  int queue_size = 5;        ///< camera_infos waiting for their tf (>= 1)
   bool lazy = true;
   GridProjectionConfig projection;
 
@@ -190,6 +193,7 @@ void visitParams(GridProjectionParams& p, Visitor& v)
   v("ground_frame", p.ground_frame);
   v("ground_height", p.ground_height);
   v("max_grid_age", p.max_grid_age);
+  v("grid_sync_tolerance", p.grid_sync_tolerance);
   v("image_cache_size", p.image_cache_size);
   v("queue_size", p.queue_size);
   v("lazy", p.lazy);

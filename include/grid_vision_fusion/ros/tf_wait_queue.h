@@ -30,14 +30,26 @@ enum class TfWaitDrop : std::uint8_t
   kQueueFull = 1,     ///< `capacity` newer messages arrived while its tf did not
 };
 
+/// Frames joined by spaces, for messages.
+inline std::string joinFrames(const std::vector<std::string>& frames)
+{
+  std::string joined;
+  for (const std::string& frame : frames)
+  {
+    joined += (joined.empty() ? "" : " ") + frame;
+  }
+  return joined;
+}
+
 /// The messages (with a std_msgs/Header `header`) waiting for the tf from their frame to every
-/// target frame at their stamp, in arrival order: what tf2_ros::MessageFilter does, without its
-/// lost wake-up. MessageFilter::add() registers a message's transform request with the buffer
-/// before it puts the message in its queue; a transform that arrives in between fires the
-/// request while the message is not there, and the message then waits until the queue
-/// overflows (tf2_ros 0.7, message_filter.h). This queue registers nothing: it asks the buffer
-/// (canTransform) when a message arrives and on every poll(), which its owner calls when the
-/// buffer receives transforms and from a timer (TfWaitPolling).
+/// target frame at their stamp (the queue's, or each message's own: `frames_of`), in arrival
+/// order: what tf2_ros::MessageFilter does, without its lost wake-up. MessageFilter::add()
+/// registers a message's transform request with the buffer before it puts the message in its
+/// queue; a transform that arrives in between fires the request while the message is not there,
+/// and the message then waits until the queue overflows (tf2_ros 0.7, message_filter.h). This
+/// queue registers nothing: it asks the buffer (canTransform) when a message arrives and on every
+/// poll(), which its owner calls when the buffer receives transforms and from a timer
+/// (TfWaitPolling).
 /// Thread-safe; `ready` and `dropped` are called one at a time, without the queue's lock held
 /// (they may call setTargetFrames(), targetFramesString(), size(), clear(), not add() or poll()).
 template <typename M>
@@ -47,13 +59,18 @@ public:
   using ConstPtr = boost::shared_ptr<const M>;
   using Ready = std::function<void(const ConstPtr&)>;
   using Dropped = std::function<void(const ConstPtr&, TfWaitDrop)>;
+  /// The target frames of one message, where they depend on the message.
+  using FramesOf = std::function<std::vector<std::string>(const M&)>;
 
-  /// `capacity` >= 1 messages wait at most.
-  TfWaitQueue(const tf2::BufferCore& buffer, std::size_t capacity, Ready ready, Dropped dropped)
+  /// `capacity` >= 1 messages wait at most. With `frames_of`, each message waits for the tf to
+  /// its own target frames and setTargetFrames() is not used.
+  TfWaitQueue(const tf2::BufferCore& buffer, std::size_t capacity, Ready ready, Dropped dropped,
+              FramesOf frames_of = nullptr)
       : buffer_(buffer),
         capacity_(std::max<std::size_t>(capacity, 1)),
         ready_(std::move(ready)),
-        dropped_(std::move(dropped))
+        dropped_(std::move(dropped)),
+        frames_of_(std::move(frames_of))
   {
   }
 
@@ -68,12 +85,7 @@ public:
   std::string targetFramesString() const
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::string joined;
-    for (const std::string& frame : frames_)
-    {
-      joined += (joined.empty() ? "" : " ") + frame;
-    }
-    return joined;
+    return joinFrames(frames_);
   }
 
   /// Passes `msg` on (with the queued ones whose tf has arrived meanwhile) when its tf is there,
@@ -154,7 +166,7 @@ private:
   /// Under mutex_.
   bool transformable(const M& msg) const
   {
-    for (const std::string& frame : frames_)
+    for (const std::string& frame : frames_of_ ? frames_of_(msg) : frames_)
     {
       if (!buffer_.canTransform(frame, msg.header.frame_id, msg.header.stamp))
       {
@@ -168,6 +180,7 @@ private:
   const std::size_t capacity_;
   const Ready ready_;
   const Dropped dropped_;
+  const FramesOf frames_of_;
   mutable std::mutex mutex_;  // queue_, frames_
   std::mutex release_mutex_;  // one add() or poll() at a time: the callbacks in order
   std::deque<ConstPtr> queue_;
