@@ -90,6 +90,11 @@ void TrackerConfig::validate() const
     throw std::invalid_argument("motion_still_window must be in [0, motion_speed_window], got " +
                                 std::to_string(still_window));
   }
+  if (!(still_short_window >= 0.0 && still_short_window <= motion_speed_window))
+  {
+    throw std::invalid_argument("motion_still_short_window must be in [0, motion_speed_window], got " +
+                                std::to_string(still_short_window));
+  }
   if (!(grid_velocity_agreement > 0.0 && grid_velocity_agreement <= 1.0))
   {
     throw std::invalid_argument("motion_grid_velocity_agreement must be in (0, 1], got " +
@@ -339,21 +344,20 @@ double Tracker::earlySpeed(const Track& track) const
   return moved / (track.history.back().stamp - track.history.front().stamp);
 }
 
-bool Tracker::stillRecently(const Track& track) const
+bool Tracker::stillFor(const Track& track, double window) const
 {
   const Sample& newest = track.history.back();
-  if (!(config_.still_window > 0.0) ||
-      newest.stamp - track.history.front().stamp < config_.still_window - 1e-6)
+  if (!(window > 0.0) || newest.stamp - track.history.front().stamp < window - 1e-6)
   {
     return false;
   }
   double farthest = 0.0;
   for (auto it = track.history.rbegin();
-       it != track.history.rend() && newest.stamp - it->stamp <= config_.still_window + 1e-6; ++it)
+       it != track.history.rend() && newest.stamp - it->stamp <= window + 1e-6; ++it)
   {
     farthest = std::max(farthest, (it->observed - newest.observed).norm());
   }
-  return farthest <= 0.5 * config_.motion_speed_threshold * config_.still_window;
+  return farthest <= 0.5 * config_.motion_speed_threshold * window;
 }
 
 bool Tracker::returningAfterJump(const Track& track) const
@@ -423,7 +427,7 @@ void Tracker::updateMotion(Track& track, const TrackObservation& observation, do
       evidence += config_.speed_evidence;
     }
     else if (std::max(filter_speed, window_speed) < 0.5 * config_.motion_speed_threshold ||
-             stillRecently(track))
+             stillFor(track, config_.still_window) || stillFor(track, config_.still_short_window))
     {
       evidence -= config_.speed_evidence;
     }

@@ -69,8 +69,8 @@ struct TrackerConfig
   /// the second half alone, when it never steps back and none by more than half of the way: a
   /// start from rest, which the filter's speed lags), −weight when both the filter's speed and
   /// the average speed of the filtered position over the window are below half of it (or the
-  /// observed position has stayed still, still_window). Needs a track older than half the window
-  /// (younger ones: early_displacement); no +weight while the observed position, after a restart
+  /// observed position has stayed still, still_window and still_short_window). Needs a track older than half
+  /// the window (younger ones: early_displacement); no +weight while the observed position, after a restart
   /// (a jump of the centre estimate), heads back to where it was before the jump (passing it
   /// within 2 position_sigma): the estimate recovering, not the object moving. Above 1 it
   /// outweighs a region vote that leans static: the grid does not resolve motion slower than
@@ -102,6 +102,13 @@ struct TrackerConfig
   /// stop, which the filter's speed and the window's average see only a second later. 0: off.
   /// [0, motion_speed_window].
   double still_window = 0.5;
+  /// The same test over this shorter window as well [s]: the centre has moved less than half a
+  /// cell in two scans. It sees the end of a stop 0.2–0.3 s sooner: an object slowing down
+  /// through the last 0.5 m/s, whose observed position also jitters by a cell now and then,
+  /// rarely stays within 0.2 m for a whole 0.5 s before it stands. A moving object's observed
+  /// position moves on within two scans (faster than the threshold, more than 0.16 m). 0: off.
+  /// [0, motion_speed_window].
+  double still_short_window = 0.2;
   /// A step of the observed position shorter than this [m] does not count as a step back in the
   /// tests of a steady displacement (progressive and early speed): the centre estimate's jitter
   /// of a few centimetres (its orientation fit) is no reversal. >= 0.
@@ -247,8 +254,9 @@ private:
   /// went steadily: no step goes back along it (a step shorter than step_tolerance is none),
   /// none is longer than max_share of it; 0 otherwise.
   double steadyDisplacement(const Track& track, std::size_t first, double max_share) const;
-  /// The observed position has stayed still over the last still_window (still_window > 0).
-  bool stillRecently(const Track& track) const;
+  /// The observed position has stayed within half of motion_speed_threshold × `window` of where
+  /// it is now over the last `window` [s] (false for `window` <= 0 or a shorter track).
+  bool stillFor(const Track& track, double window) const;
   /// The observed position has been heading back to where it was before the track's last
   /// restart (within 45°, and passing that position within 2 track_position_sigma), within
   /// motion_speed_window of it.

@@ -271,6 +271,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("motion_grid_velocity_min_cells", t.grid_velocity_min_cells);
   v("motion_early_displacement", t.early_displacement);
   v("motion_still_window", t.still_window);
+  v("motion_still_short_window", t.still_short_window);
   v("motion_step_tolerance", t.step_tolerance);
   v("motion_speed_overrides_region", t.speed_overrides_region);
 }
