@@ -280,6 +280,15 @@ public:
     return it->second;
   }
   void setClock(const std::string& nodelet, const ros::Time& stamp) { clocks_[nodelet] = stamp; }
+  /// A stamp 30 s before the nodelet's clock (time going backwards, a bag loop), from which its
+  /// clock goes on; the case expects the nodelet's output for it.
+  ros::Time jumpBack(const std::string& nodelet)
+  {
+    const ros::Time stamp = next(nodelet) - ros::Duration(30.0);
+    setClock(nodelet, stamp);
+    bad_outputs_.insert(stamp);
+    return stamp;
+  }
 
   /// Whether the manager logged (WARN or worse) a line containing `text`.
   bool logged(const std::string& text) const
@@ -628,18 +637,14 @@ std::vector<Case> cases()
       {"CloudTimeGoesBackwards", "dynamic_grid",
        [](Bench& b)
        {
-         const ros::Time stamp = b.next("dynamic_grid") - ros::Duration(30.0);
-         b.setClock("dynamic_grid", stamp);
-         b.bad_outputs_.insert(stamp);
+         const ros::Time stamp = b.jumpBack("dynamic_grid");
          b.pub_points_.publish(makeCloud(720, stamp, "velo_link"));
        },
        "time jumped backwards by", ""},
       {"PairTimeGoesBackwards", "fusion",
        [](Bench& b)
        {
-         const ros::Time stamp = b.next("fusion") - ros::Duration(30.0);
-         b.setClock("fusion", stamp);
-         b.bad_outputs_.insert(stamp);
+         const ros::Time stamp = b.jumpBack("fusion");
          b.pub_detections_.publish(makeDetections(stamp));
          b.pub_projected_.publish(makeProjected(stamp));
        },
@@ -647,9 +652,7 @@ std::vector<Case> cases()
       {"GridTimeGoesBackwards", "grid_projection",
        [](Bench& b)
        {
-         const ros::Time stamp = b.next("grid_projection") - ros::Duration(30.0);
-         b.setClock("grid_projection", stamp);
-         b.bad_outputs_.insert(stamp);
+         const ros::Time stamp = b.jumpBack("grid_projection");
          b.pub_grid_.publish(makeGrid(stamp));
          // Again until projected: a camera_info that overtakes the grid goes with the old ones.
          waitFor([&] { return b.output("grid_projection", stamp); }, kOutputTimeoutS,
