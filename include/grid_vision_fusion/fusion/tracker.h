@@ -69,12 +69,12 @@ struct TrackerConfig
   /// the second half alone, when it never steps back and none by more than half of the way: a
   /// start from rest, which the filter's speed lags), −weight when both the filter's speed and
   /// the average speed of the filtered position over the window are below half of it (or the
-  /// observed position has stayed still, still_window and still_short_window). Needs a track older than half
-  /// the window (younger ones: early_displacement); no +weight while the observed position, after a restart
-  /// (a jump of the centre estimate), heads back to where it was before the jump (passing it
-  /// within 2 position_sigma): the estimate recovering, not the object moving. Above 1 it
-  /// outweighs a region vote that leans static: the grid does not resolve motion slower than
-  /// about a cell per scan, whose cells stay occupied and turn static.
+  /// observed position has stayed still, still_window and still_short_window). Needs a track
+  /// older than half the window (younger ones: early_displacement); no +weight while the
+  /// observed position, after a restart (a jump of the centre estimate), heads back to where it
+  /// was before the jump (passing it within 2 position_sigma): the estimate recovering, not the
+  /// object moving. Above 1 it outweighs a region vote that leans static: the grid does not
+  /// resolve motion slower than about a cell per scan, whose cells stay occupied and turn static.
   double speed_evidence = 2.0;
   /// [m/s], > 0. Below the 1 m/s that counts as moving: the sustained speed, a minimum of two
   /// noisy averages, reads low.
