@@ -50,11 +50,7 @@ public:
   {
     std::lock_guard<std::mutex> lock(mutex_);
     std::vector<Pair> out;
-    for (const InfoPtr& waiting : waiting_)
-    {
-      out.push_back({waiting, chooseFor(waiting->header.stamp)});
-    }
-    waiting_.clear();
+    pairAllWaiting(out);
     if (complete(info->header.stamp))
     {
       out.push_back({info, chooseFor(info->header.stamp)});
@@ -73,11 +69,7 @@ public:
     std::vector<Pair> out;
     if (!grids_.empty() && grid->header.stamp < grids_.back()->header.stamp)
     {
-      for (const InfoPtr& waiting : waiting_)
-      {
-        out.push_back({waiting, chooseFor(waiting->header.stamp)});
-      }
-      waiting_.clear();
+      pairAllWaiting(out);
       grids_.clear();
     }
     grids_.push_back(grid);
@@ -116,6 +108,16 @@ public:
   }
 
 private:
+  /// Under mutex_: every waiting camera_info, with the best grid there is, appended to `out`.
+  void pairAllWaiting(std::vector<Pair>& out)
+  {
+    for (const InfoPtr& waiting : waiting_)
+    {
+      out.push_back({waiting, chooseFor(waiting->header.stamp)});
+    }
+    waiting_.clear();
+  }
+
   /// Under mutex_: the grid of the sweep at `stamp` has arrived (or no waiting is wanted).
   bool complete(const ros::Time& stamp) const
   {
