@@ -31,6 +31,14 @@ inline std::string toString(Motion motion)
   return "unknown";
 }
 
+/// State of an object's track; the values equal the DetectedObject.msg TRACK_* constants.
+enum class TrackState : std::uint8_t
+{
+  kNone = 0,       ///< not tracked (the per-frame output)
+  kTentative = 1,  ///< a new track, not yet confirmed
+  kConfirmed = 2,  ///< a track with enough images
+};
+
 /// State of a projected grid cell; the values equal the ProjectedGrid.msg constants.
 enum class CellState : std::uint8_t
 {
@@ -73,6 +81,12 @@ struct ProjectedPointsView
   /// Scans since each point's cell last held obstacle points (0: the grid's scan); optional
   /// (nullptr: every point counts as seen in the grid's scan).
   const std::uint8_t* scans_since_hit = nullptr;
+  /// The cell's occupied masses P(static) and P(dynamic), [0, 1]; optional (nullptr: not given).
+  const float* p_static = nullptr;
+  const float* p_dynamic = nullptr;
+  /// Variances of the cell's velocity given dynamic [m²/s²]; optional (nullptr: not given).
+  const float* v_var_x = nullptr;
+  const float* v_var_y = nullptr;
 };
 
 /// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and
@@ -93,6 +107,16 @@ ProjectedPointsView pointsViewOf(const PointArrays& arrays)
   if (arrays.scans_since_hit.size() == view.size && view.size > 0)
   {
     view.scans_since_hit = arrays.scans_since_hit.data();
+  }
+  if (arrays.p_static.size() == view.size && arrays.p_dynamic.size() == view.size && view.size > 0)
+  {
+    view.p_static = arrays.p_static.data();
+    view.p_dynamic = arrays.p_dynamic.data();
+  }
+  if (arrays.v_var_x.size() == view.size && arrays.v_var_y.size() == view.size && view.size > 0)
+  {
+    view.v_var_x = arrays.v_var_x.data();
+    view.v_var_y = arrays.v_var_y.data();
   }
   return view;
 }

@@ -1,5 +1,7 @@
 #include "grid_vision_fusion/fusion/fusion.h"
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -56,32 +58,6 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
   return order;
 }
 
-/// Sets object.grid_vx, grid_vy and grid_velocity_agreement from the velocities of its cluster's cells.
-void gridVelocity(const ProjectedPointsView& points, FusedObject& object)
-{
-  if (object.cluster.empty())
-  {
-    return;
-  }
-  std::vector<double> vxs, vys;
-  vxs.reserve(object.cluster.size());
-  vys.reserve(object.cluster.size());
-  for (std::uint32_t i : object.cluster)
-  {
-    vxs.push_back(points.vx[i]);
-    vys.push_back(points.vy[i]);
-  }
-  object.grid_vx = median(vxs);
-  object.grid_vy = median(vys);
-  const double tolerance = std::max(0.5, 0.5 * std::hypot(object.grid_vx, object.grid_vy));
-  std::size_t agreeing = 0;
-  for (std::uint32_t i : object.cluster)
-  {
-    agreeing += std::hypot(points.vx[i] - object.grid_vx, points.vy[i] - object.grid_vy) <= tolerance ? 1 : 0;
-  }
-  object.grid_velocity_agreement = static_cast<double>(agreeing) / static_cast<double>(object.cluster.size());
-}
-
 FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& box,
                               const std::vector<std::size_t>& members, const ProjectedPointsView& points,
                               const FusionConfig& config)
@@ -103,7 +79,7 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
   object.x = object.median_x;
   object.y = object.median_y;
   object.cluster = objectCluster(points, object.members, box, config.centre.cluster_distance);
-  gridVelocity(points, object);
+  object.grid = gridEvidence(points, object.cluster);
   for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? object.cluster : object.members)
   {
     if (points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic))
@@ -118,6 +94,8 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
     }
   }
   object.motion = decideMotion(object.static_points, object.dynamic_points, config);
+  const double votes = static_cast<double>(object.static_points) + object.dynamic_points;
+  object.p_dynamic = votes > 0.0 ? object.dynamic_points / votes : 0.5;
   if (object.motion == Motion::kDynamic)
   {
     object.vx = median(vxs);
@@ -247,6 +225,46 @@ FusionRegion FusionRegion::fromBox(const BoundingBox& box, const FusionConfig& c
 double FusedObject::speed() const
 {
   return std::hypot(vx, vy);
+}
+
+GridMotionEvidence gridEvidence(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cells)
+{
+  GridMotionEvidence evidence;
+  if (cells.empty())
+  {
+    return evidence;
+  }
+  double share_sum = 0.0;
+  double weight_sum = 0.0;  // the shares of the cells with a finite velocity
+  Eigen::Vector2d velocity_sum = Eigen::Vector2d::Zero();
+  Eigen::Vector2d square_sum = Eigen::Vector2d::Zero();
+  const bool variances = points.v_var_x != nullptr && points.v_var_y != nullptr;
+  for (std::uint32_t i : cells)
+  {
+    double share = points.state[i] == static_cast<std::uint8_t>(CellState::kDynamic) ? 1.0 : 0.0;
+    if (points.p_static != nullptr && points.p_dynamic != nullptr)
+    {
+      const double occupied = static_cast<double>(points.p_static[i]) + points.p_dynamic[i];
+      share = occupied > 0.0 ? points.p_dynamic[i] / occupied : 0.5;
+    }
+    share_sum += share;
+    const Eigen::Vector2d v(points.vx[i], points.vy[i]);
+    if (variances && v.allFinite())
+    {
+      weight_sum += share;
+      velocity_sum += share * v;
+      square_sum += share * (v.cwiseProduct(v) + Eigen::Vector2d(points.v_var_x[i], points.v_var_y[i]));
+    }
+  }
+  evidence.dynamic_share = share_sum / static_cast<double>(cells.size());
+  if (weight_sum > 0.0)
+  {
+    evidence.velocity = velocity_sum / weight_sum;
+    evidence.velocity_variance =
+        (square_sum / weight_sum - evidence.velocity.cwiseProduct(evidence.velocity)).cwiseMax(0.0);
+    evidence.has_velocity = evidence.velocity.allFinite() && evidence.velocity_variance.allFinite();
+  }
+  return evidence;
 }
 
 double median(std::vector<double>& values)

@@ -14,6 +14,8 @@ namespace grid_vision_fusion
 {
 namespace
 {
+constexpr double kPi = 3.14159265358979323846;
+
 constexpr double kMinEdgeDistanceM = 0.05;  // closeness criterion: nearer points count as this near
 constexpr double kCoarseStepRad = M_PI / 20.0;
 constexpr double kFineStepRad = M_PI / 180.0;
@@ -211,6 +213,8 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
     const double dim_a = length_along_a ? footprint->length : footprint->width;
     const double dim_b = length_along_a ? footprint->width : footprint->length;
     covers_more = extent_a > dim_a || extent_b > dim_b;
+    estimate.length_yaw = estimate.yaw + (length_along_a ? 0.0 : 0.5 * kPi);
+    estimate.hidden_length = std::max(0.0, footprint->length - (length_along_a ? extent_a : extent_b));
     a_centre = axisCentre(e.a_lo, e.a_hi, a_cam, dim_a);
     b_centre = axisCentre(e.b_lo, e.b_hi, b_cam, dim_b);
     estimate.source = CentreSource::kCompleted;
@@ -218,6 +222,7 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
   else
   {
     estimate.source = CentreSource::kExtent;
+    estimate.length_yaw = estimate.yaw + (e.a_hi - e.a_lo >= e.b_hi - e.b_lo ? 0.0 : 0.5 * kPi);
     covers_more = false;
   }
   estimate.x = c * a_centre - s * b_centre;
@@ -415,6 +420,8 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
             : centreOfCluster(points, object.cluster, camera_x, camera_y, size, config.max_scans_since_hit);
     object.x = centre.x;
     object.y = centre.y;
+    object.length_yaw = centre.length_yaw;
+    object.hidden_length = centre.hidden_length;
   }
 }
 

@@ -102,10 +102,12 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     const cv::Scalar color = motionColor(object ? object->motion : Motion::kUnknown);
     const cv::Point2f top_left(detection.box.x_min, detection.box.y_min);
     cv::rectangle(image, top_left, cv::Point2f(detection.box.x_max, detection.box.y_max), color, 2);
-    const bool tentative =
-        std::find(result.tentative.begin(), result.tentative.end(), d) != result.tentative.end();
-    std::string text = detection.label + (tentative ? " (new track)" : " (no grid points)");
-    if (object)
+    std::string text = detection.label + " (no grid points)";
+    if (object && object->track_state == TrackState::kTentative)
+    {
+      text = trackLabel(object->id, object->motion, detection.label, object->speed()) + " (new)";
+    }
+    else if (object)
     {
       text = result.tracked ? trackLabel(object->id, object->motion, detection.label, object->speed())
                             : objectLabel(object->motion, detection.label, object->speed());

@@ -115,6 +115,8 @@ void ProjectedCells::reserve(std::size_t points)
   }
   state.reserve(points);
   scans_since_hit.reserve(points);
+  v_var_x.reserve(points);
+  v_var_y.reserve(points);
 }
 
 ProjectedPointsView ProjectedCells::view() const
@@ -248,6 +250,11 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
         if (grid.scans_since_hit)
         {
           out.scans_since_hit.push_back(grid.scans_since_hit[i]);
+        }
+        if (grid.v_var_x && grid.v_var_y)
+        {
+          out.v_var_x.push_back(grid.v_var_x[i]);
+          out.v_var_y.push_back(grid.v_var_y[i]);
         }
       }
     }

@@ -78,6 +78,12 @@ std::string checkProjectedGrid(const ProjectedGrid& msg)
       return error.str();
     }
   }
+  if ((!msg.v_var_x.empty() || !msg.v_var_y.empty()) && (msg.v_var_x.size() != n || msg.v_var_y.size() != n))
+  {
+    return "ProjectedGrid arrays v_var_x and v_var_y have " + std::to_string(msg.v_var_x.size()) + " and " +
+           std::to_string(msg.v_var_y.size()) +
+           " elements, expected none (not carried) or as many as u: " + std::to_string(n);
+  }
   if (!msg.scans_since_hit.empty() && msg.scans_since_hit.size() != n)
   {
     return "ProjectedGrid array scans_since_hit has " + std::to_string(msg.scans_since_hit.size()) +
@@ -108,6 +114,8 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
     out.label = detection.label;
     out.score = detection.score;
     out.motion = static_cast<std::uint8_t>(object.motion);
+    out.p_dynamic = static_cast<float>(object.p_dynamic);
+    out.track_state = static_cast<std::uint8_t>(object.track_state);
     out.static_points = object.static_points;
     out.dynamic_points = object.dynamic_points;
     out.position.x = object.x;

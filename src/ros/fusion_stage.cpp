@@ -59,7 +59,8 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     }
     has_stamp_ = true;
     last_stamp_ = stamp;
-    trackObjects(tracker_, detections.header.stamp.toSec(), pair.detections, pair.result);
+    trackObjects(tracker_, detections.header.stamp.toSec(), pair.detections, detections.image_width,
+                 pair.result);
   }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
   return pair;

@@ -131,6 +131,8 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
   msg->p_dynamic = std::move(cells.p_dynamic);
   msg->state = std::move(cells.state);
   msg->scans_since_hit = std::move(cells.scans_since_hit);
+  msg->v_var_x = std::move(cells.v_var_x);
+  msg->v_var_y = std::move(cells.v_var_y);
   return msg;
 }
 

@@ -391,32 +391,58 @@ TEST(Fuse, ClusterVoteLeavesOutTheCellsAroundTheObject)
   EXPECT_EQ(o.members.size(), 11U);
 }
 
-// The grid's velocity of an object comes from its own cluster, static cells included: 5 cells
-// of a slow car whose mass has turned static carry its particles' velocity (3.0–3.4 m/s along x),
-// one carries none; the wall behind it (another cluster) does not count.
-TEST(Fuse, GridVelocityIsTheMedianOfTheClustersCells)
+// The grid's evidence about an object comes from its own cluster, static cells included: 5 cells
+// of a slow car whose mass has turned mostly static carry its particles' velocity (3.0–3.4 m/s
+// along x); the wall behind it (another cluster) does not count. The cells' dynamic shares
+// weigh their velocities; the variance adds the particles' spread and the spread of the means.
+TEST(Fuse, GridEvidenceComesFromTheClustersCells)
 {
   ProjectedPoints pts;
-  const float vx[] = {3.0F, 3.1F, 3.2F, 3.3F, 3.4F, 0.0F};
-  for (int k = 0; k < 6; ++k)
+  const float vx[] = {3.0F, 3.1F, 3.2F, 3.3F, 3.4F};
+  for (int k = 0; k < 5; ++k)
   {
     pts.add(140.F + 5.F * static_cast<float>(k), 178.F, 10.F + 0.1F * static_cast<float>(k), 0.2F, vx[k],
             0.1F, k == 0 ? CellState::kDynamic : CellState::kStatic);
+    pts.p_static.push_back(k == 0 ? 0.2F : 0.6F);
+    pts.p_dynamic.push_back(k == 0 ? 0.6F : 0.2F);
+    pts.v_var_x.push_back(0.5F);
+    pts.v_var_y.push_back(0.5F);
   }
   for (int k = 0; k < 3; ++k)
   {
     pts.add(120.F + 10.F * static_cast<float>(k), 161.F, 13.F, -1.F + 0.2F * static_cast<float>(k), -9.F, 0.F,
             CellState::kStatic);
+    pts.p_static.push_back(0.9F);
+    pts.p_dynamic.push_back(0.0F);
+    pts.v_var_x.push_back(30.F);
+    pts.v_var_y.push_back(30.F);
   }
   const FusionResult result = fuse({kBox}, pts.view(), FusionConfig{});
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& o = result.objects[0];
-  EXPECT_EQ(o.cluster.size(), 6U);
-  EXPECT_NEAR(o.grid_vx, 3.15, 1e-6);  // median of 0, 3.0, ..., 3.4
-  EXPECT_NEAR(o.grid_vy, 0.1, 1e-6);
-  // Within max(0.5, 3.15 / 2) m/s of it: the 5 moving cells, not the empty one.
-  EXPECT_NEAR(o.grid_velocity_agreement, 5.0 / 6.0, 1e-9);
-  EXPECT_EQ(o.motion, Motion::kStatic);  // the masses alone: 5 static cells against 1
+  EXPECT_EQ(o.cluster.size(), 5U);
+  EXPECT_NEAR(o.grid.dynamic_share, (0.75 + 4 * 0.25) / 5.0, 1e-6);
+  ASSERT_TRUE(o.grid.has_velocity);
+  // Weights 0.75, 0.25 × 4: (0.75 · 3.0 + 0.25 · (3.1 + 3.2 + 3.3 + 3.4)) / 1.75.
+  EXPECT_NEAR(o.grid.velocity.x(), (0.75 * 3.0 + 0.25 * 13.0) / 1.75, 1e-5);
+  EXPECT_NEAR(o.grid.velocity.y(), 0.1, 1e-6);
+  EXPECT_GT(o.grid.velocity_variance.x(), 0.5);
+  EXPECT_LT(o.grid.velocity_variance.x(), 0.6);
+  EXPECT_NEAR(o.grid.velocity_variance.y(), 0.5, 1e-5);
+  EXPECT_EQ(o.motion, Motion::kStatic);  // the states: 4 static cells against 1
+  EXPECT_NEAR(o.p_dynamic, 1.0 / 8.0, 1e-12) << "the region's vote: 1 dynamic of 8 cells";
+
+  // Without masses and variances (a view that does not carry them) the states give the share
+  // and there is no velocity evidence.
+  ProjectedPoints bare = pts;
+  bare.p_static.clear();
+  bare.p_dynamic.clear();
+  bare.v_var_x.clear();
+  bare.v_var_y.clear();
+  const FusedObject& b = fuse({kBox}, bare.view(), FusionConfig{}).objects.at(0);
+  EXPECT_NEAR(b.grid.dynamic_share, 0.2, 1e-12);
+  EXPECT_FALSE(b.grid.has_velocity);
+  EXPECT_DOUBLE_EQ(gridEvidence(bare.view(), {}).dynamic_share, 0.5);
 }
 
 TEST(CheckFusionInputs, AcceptsGoodAndNamesTheFault)

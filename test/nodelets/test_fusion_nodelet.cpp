@@ -243,8 +243,8 @@ TEST_F(FusionNodeletTest, ObjectsCarryEveryField)
 
 TEST_F(FusionNodeletTest, TrackedObjectsKeepTheirIdsAndTheMarkersShowThem)
 {
-  // The instance under /tracked runs the defaults: the first image only starts (tentative)
-  // tracks, from the second on the car and the van are published with track ids that stay.
+  // The instance under /tracked runs the defaults: the car and the van are published from the
+  // first image, as tentative tracks, then confirmed, with track ids that stay.
   ros::Publisher detections = nh_.advertise<Detection2DArray>("/tracked/detections", 10);
   ros::Publisher grids = nh_.advertise<ProjectedGrid>("/tracked/projected_grid", 10);
   std::vector<DetectedObjectArray::ConstPtr> objects;
@@ -264,17 +264,19 @@ TEST_F(FusionNodeletTest, TrackedObjectsKeepTheirIdsAndTheMarkersShowThem)
     grids.publish(makeGrid(stamp));
     ASSERT_TRUE(waitFor([&] { return objects.size() > static_cast<std::size_t>(k); }, 10.0)) << "image " << k;
   }
-  EXPECT_TRUE(objects[0]->objects.empty()) << "a track is confirmed at its second hit";
-  ASSERT_EQ(objects[1]->objects.size(), 2U);
-  const std::uint32_t car = objects[1]->objects[0].id;
-  const std::uint32_t van = objects[1]->objects[1].id;
+  ASSERT_EQ(objects[0]->objects.size(), 2U) << "no detected object is withheld";
+  const std::uint32_t car = objects[0]->objects[0].id;
+  const std::uint32_t van = objects[0]->objects[1].id;
   EXPECT_GE(car, 1U);
   EXPECT_NE(car, van);
-  for (std::size_t k = 2; k < objects.size(); ++k)
+  for (std::size_t k = 0; k < objects.size(); ++k)
   {
     ASSERT_EQ(objects[k]->objects.size(), 2U);
     EXPECT_EQ(objects[k]->objects[0].id, car);
     EXPECT_EQ(objects[k]->objects[1].id, van);
+    const std::uint8_t state = k == 0 ? DetectedObject::TRACK_TENTATIVE : DetectedObject::TRACK_CONFIRMED;
+    EXPECT_EQ(objects[k]->objects[0].track_state, state) << "image " << k;
+    EXPECT_EQ(objects[k]->objects[1].track_state, state) << "image " << k;
   }
   ASSERT_TRUE(waitFor([&] { return markers.size() >= 4; }, 10.0)) << "no markers";
   bool labelled = false;

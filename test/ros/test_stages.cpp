@@ -276,8 +276,8 @@ TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
   EXPECT_EQ(stage.config().min_points, FusionConfig{}.min_points)
       << "a refused configuration changes nothing";
 
-  // With the defaults the stage tracks: the first pair starts a tentative track (nothing
-  // published), the next ones publish it with the same track id; the centre lies beyond the
+  // With the defaults the stage tracks: the first pair starts a tentative track, published as
+  // such, the next ones publish it confirmed with the same track id; the centre lies beyond the
   // cells seen from the camera at the origin.
   FusionStage tracked(FusionParams{});
   grid.image_width = 640;
@@ -287,14 +287,12 @@ TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
     detections.header.stamp = kStamp + ros::Duration(0.1 * k);
     grid.header.stamp = detections.header.stamp;
     const FusedPair p = tracked.fuse(detections, grid);
-    if (k == 0)
-    {
-      EXPECT_TRUE(p.objects->objects.empty());
-      EXPECT_EQ(p.result.tentative, std::vector<std::size_t>{0});
-      continue;
-    }
     ASSERT_EQ(p.objects->objects.size(), 1U) << "pair " << k;
-    id = k == 1 ? p.objects->objects[0].id : id;
+    EXPECT_EQ(p.objects->objects[0].track_state,
+              k == 0 ? DetectedObject::TRACK_TENTATIVE : DetectedObject::TRACK_CONFIRMED);
+    EXPECT_GE(p.objects->objects[0].p_dynamic, 0.F);
+    EXPECT_LE(p.objects->objects[0].p_dynamic, 1.F);
+    id = k == 0 ? p.objects->objects[0].id : id;
     EXPECT_EQ(p.objects->objects[0].id, id);
     EXPECT_GT(p.objects->objects[0].position.x, 12.4);
   }

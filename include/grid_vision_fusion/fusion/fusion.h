@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/fusion/motion_model.h"
 #include "grid_vision_fusion/fusion/object_centre.h"
 #include "grid_vision_fusion/types.h"
 
@@ -90,6 +91,9 @@ struct ProjectedPoints
   /// Scans since each point's cell last held obstacle points; optional (empty: none given,
   /// add() leaves it so).
   std::vector<std::uint8_t> scans_since_hit;
+  /// The cells' occupied masses and velocity variances; optional (empty: none given, add()
+  /// leaves them so).
+  std::vector<float> p_static, p_dynamic, v_var_x, v_var_y;
 
   /// Appends one point.
   void add(float pu, float pv, float px, float py, float pvx, float pvy, CellState s);
@@ -127,14 +131,17 @@ struct FusedObject
   double vx = 0.0;                   ///< median vx of the vote's dynamic points [m/s]; 0 unless kDynamic
   double vy = 0.0;                   ///< median vy of the vote's dynamic points [m/s]; 0 unless kDynamic
   double heading = 0.0;              ///< atan2(vy, vx) [rad]; 0 unless kDynamic
-  /// The grid's velocity of the object: the component-wise median of the mean velocities of its
-  /// cluster's cells, static or dynamic alike [m/s] (0 without a cluster)...
-  double grid_vx = 0.0;
-  double grid_vy = 0.0;
-  /// ...and the share of those cells whose velocity lies within max(0.5 m/s, half its speed) of
-  /// it, in [0, 1]: the cells of a moving object agree on one velocity, a static object's few
-  /// particles scatter around zero.
-  double grid_velocity_agreement = 0.0;
+  /// Direction of the object's length [rad] and how much of it its cells miss [m]
+  /// (CentreEstimate::length_yaw, hidden_length), set by estimateCentres(): where a box is cut
+  /// by the image edge, the centre is that uncertain along that axis.
+  double length_yaw = 0.0;
+  double hidden_length = 0.0;
+  /// What the grid says about the object's motion, from the cells of its cluster (gridEvidence()).
+  GridMotionEvidence grid;
+  /// P(dynamic), [0, 1]: the track's (tracked), else the vote's dynamic share d / (s + d).
+  double p_dynamic = 0.5;
+  /// Tracked only: whether the object's track is tentative or confirmed.
+  TrackState track_state = TrackState::kNone;
   std::vector<std::uint32_t> members;  ///< indices of the region's valid points
   /// The object's own cells among the members: objectCluster() at centre.cluster_distance.
   std::vector<std::uint32_t> cluster;
@@ -151,13 +158,18 @@ struct FusionResult
   std::size_t invalid_points = 0;
   /// The objects went through the tracker: ids are track ids, motion and state the track's.
   bool tracked = false;
-  /// Tracked only: detection indices of the objects held back while their track is tentative.
-  std::vector<std::size_t> tentative;
 };
 
 /// Median of `values` (average of the two middle values for an even count).
 /// Reorders `values`. @throws std::invalid_argument when empty.
 double median(std::vector<double>& values);
+
+/// What the grid says about the motion of the object made of the points `cells`: the mean
+/// dynamic share P(D) / (P(S) + P(D)) of the cells (their state, 1 or 0, where the view carries
+/// no masses; 0.5 without cells) and, where the view carries the velocity variances, the cells'
+/// velocities weighted by their dynamic share with their variance (particles' spread plus the
+/// spread of the cells' means).
+GridMotionEvidence gridEvidence(const ProjectedPointsView& points, const std::vector<std::uint32_t>& cells);
 
 /// Motion of a region from its cardinalities (larger set wins; tie and minimum count per
 /// `config`). Returns kUnknown for an empty region.

@@ -133,6 +133,9 @@ struct ProjectedCells
   /// Per point, the cell's scans since it last held obstacle points; empty without
   /// GridCellsView::scans_since_hit.
   std::vector<std::uint8_t> scans_since_hit;
+  /// Per point, the variances of the cell's velocity given dynamic [m²/s²]; empty without
+  /// GridCellsView::v_var_x and v_var_y.
+  std::vector<float> v_var_x, v_var_y;
 
   std::size_t cells_selected = 0;  ///< cells that passed the occupancy threshold
   std::size_t cells_invalid =

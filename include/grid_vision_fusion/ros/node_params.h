@@ -254,26 +254,13 @@ void visitParams(FusionParams& p, Visitor& v)
   v("track_gate_sigma", t.gate_sigma);
   v("track_min_iou", t.min_iou);
   v("track_iou_weight", t.iou_weight);
-  v("track_acceleration_sigma", t.acceleration_sigma);
   v("track_position_sigma", t.position_sigma);
-  v("track_velocity_sigma", t.velocity_sigma);
-  v("track_initial_speed_sigma", t.initial_speed_sigma);
   v("track_max_gap", t.max_gap);
-  v("track_robust_sigma", t.robust_sigma);
-  v("motion_evidence_limit", t.motion_evidence_limit);
-  v("motion_switch_evidence", t.motion_switch_evidence);
-  v("motion_min_dwell", t.motion_min_dwell);
-  v("motion_speed_evidence", t.speed_evidence);
-  v("motion_speed_threshold", t.motion_speed_threshold);
-  v("motion_speed_window", t.motion_speed_window);
-  v("motion_grid_velocity_evidence", t.grid_velocity_evidence);
-  v("motion_grid_velocity_agreement", t.grid_velocity_agreement);
-  v("motion_grid_velocity_min_cells", t.grid_velocity_min_cells);
-  v("motion_early_displacement", t.early_displacement);
-  v("motion_still_window", t.still_window);
-  v("motion_still_short_window", t.still_short_window);
-  v("motion_step_tolerance", t.step_tolerance);
-  v("motion_speed_overrides_region", t.speed_overrides_region);
+  v("track_acceleration_sigma", t.motion.acceleration_sigma);
+  v("motion_position_sigma", t.motion.position_sigma);
+  v("motion_speed_sigma", t.motion.speed_sigma);
+  v("motion_switch_time", t.motion.switch_time);
+  v("motion_grid_error", t.motion.grid_error);
 }
 
 /// The values of the table `params` by parameter name (the defaults for a default-constructed one).

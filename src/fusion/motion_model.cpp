@@ -1,0 +1,241 @@
+#include "grid_vision_fusion/fusion/motion_model.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace grid_vision_fusion
+{
+namespace
+{
+void requireRange(const char* name, double value, double low, double high)
+{
+  if (!std::isfinite(value) || !(value > low) || !(value < high))
+  {
+    std::ostringstream msg;
+    msg << name << " must be a finite value in (" << low << ", " << high << "), got " << value;
+    throw std::invalid_argument(msg.str());
+  }
+}
+
+/// The smallest variance of the grid's velocity [m²/s²]: a cell whose particles all agree still
+/// knows its velocity only to about 0.1 m/s.
+constexpr double kMinGridVariance = 0.01;
+
+/// The smallest dynamic share by which the grid's velocity noise is divided: cells with almost no
+/// dynamic mass still say a little about the velocity.
+constexpr double kMinVelocityShare = 0.05;
+
+/// Log of exp(a) + exp(b) without overflow.
+double logAdd(double a, double b)
+{
+  const double high = std::max(a, b);
+  return high + std::log1p(std::exp(std::min(a, b) - high));
+}
+
+/// The probability of D from the log-likelihoods of the two modes and the prior P(D).
+double posterior(double prior_dynamic, double log_l_static, double log_l_dynamic)
+{
+  const double log_s = std::log(std::max(1.0 - prior_dynamic, 1e-300)) + log_l_static;
+  const double log_d = std::log(std::max(prior_dynamic, 1e-300)) + log_l_dynamic;
+  return std::exp(log_d - logAdd(log_s, log_d));
+}
+}  // namespace
+
+void MotionModelConfig::validate() const
+{
+  const double inf = std::numeric_limits<double>::infinity();
+  requireRange("motion_position_sigma", position_sigma, 0.0, inf);
+  requireRange("track_acceleration_sigma", acceleration_sigma, 0.0, inf);
+  requireRange("motion_speed_sigma", speed_sigma, 0.0, inf);
+  requireRange("motion_switch_time", switch_time, 0.0, inf);
+  requireRange("motion_grid_error", grid_error, 0.0, 0.5);
+}
+
+double logCauchy2(const Eigen::Vector2d& residual, const Eigen::Matrix2d& scale)
+{
+  // Bivariate Student-t, ν = 1: Γ(3/2) / (Γ(1/2) π |Σ|^½) · (1 + d²)^(−3/2).
+  constexpr double kLogNormaliser = -1.8378770664093453;  // log(Γ(3/2) / (Γ(1/2) π)) = log(1 / 2π)
+  const double d2 = residual.dot(scale.ldlt().solve(residual));
+  return kLogNormaliser - 0.5 * std::log(scale.determinant()) - 1.5 * std::log1p(d2);
+}
+
+MotionModel::MotionModel(const MotionModelConfig& config) : config_(config)
+{
+  config_.validate();
+}
+
+void MotionModel::setConfig(const MotionModelConfig& config)
+{
+  config.validate();
+  config_ = config;
+}
+
+double MotionModel::speedSigma() const
+{
+  const Eigen::Vector2d v = moving_.tail<2>();
+  const Eigen::Matrix2d p = moving_cov_.bottomRightCorner<2, 2>();
+  const double speed = v.norm();
+  if (speed < 1e-9)
+  {
+    return std::sqrt(0.5 * p.trace());
+  }
+  return std::sqrt(std::max(0.0, v.dot(p * v)) / (speed * speed));
+}
+
+void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
+{
+  const double r = config_.position_sigma * config_.position_sigma;
+  const double v = config_.speed_sigma * config_.speed_sigma;
+  standing_ = position;
+  standing_cov_ = r * Eigen::Matrix2d::Identity();
+  moving_ << position, 0.0, 0.0;
+  moving_cov_ = Eigen::Vector4d(r, r, v, v).asDiagonal();
+  mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
+  grid_log_ratio_ = 0.0;
+}
+
+void MotionModel::predict(double dt)
+{
+  if (!(dt > 0.0))
+  {
+    return;
+  }
+  // Mixing (IMM step 1): the probability that the mode was i given that it is j now, then each
+  // model's starting point as the mixture of both. S enters D with the prior velocity.
+  const double p_switch = 1.0 - std::exp(-dt / config_.switch_time);
+  const double mu_s = 1.0 - mu_dynamic_;
+  const double mu_d = mu_dynamic_;
+  const double c_s = mu_s * (1.0 - p_switch) + mu_d * p_switch;
+  const double c_d = mu_s * p_switch + mu_d * (1.0 - p_switch);
+  const double w_ss = c_s > 0.0 ? mu_s * (1.0 - p_switch) / c_s : 1.0;  // S now, S before
+  const double w_ds = 1.0 - w_ss;                                       // S now, D before
+  const double w_sd = c_d > 0.0 ? mu_s * p_switch / c_d : 0.0;          // D now, S before
+  const double w_dd = 1.0 - w_sd;                                       // D now, D before
+
+  const double v_prior = config_.speed_sigma * config_.speed_sigma;
+  Eigen::Vector4d from_standing;
+  from_standing << standing_, 0.0, 0.0;
+  Eigen::Matrix4d from_standing_cov = Eigen::Matrix4d::Zero();
+  from_standing_cov.topLeftCorner<2, 2>() = standing_cov_;
+  from_standing_cov.bottomRightCorner<2, 2>() = v_prior * Eigen::Matrix2d::Identity();
+
+  const Eigen::Vector2d s0 = w_ss * standing_ + w_ds * moving_.head<2>();
+  const Eigen::Vector2d ds = standing_ - s0;
+  const Eigen::Vector2d dm = moving_.head<2>() - s0;
+  const Eigen::Matrix2d s0_cov = w_ss * (standing_cov_ + ds * ds.transpose()) +
+                                 w_ds * (moving_cov_.topLeftCorner<2, 2>() + dm * dm.transpose());
+  const Eigen::Vector4d d0 = w_sd * from_standing + w_dd * moving_;
+  const Eigen::Vector4d e_s = from_standing - d0;
+  const Eigen::Vector4d e_d = moving_ - d0;
+  const Eigen::Matrix4d d0_cov =
+      w_sd * (from_standing_cov + e_s * e_s.transpose()) + w_dd * (moving_cov_ + e_d * e_d.transpose());
+
+  // Prediction (IMM step 2): S stands; D moves at constant velocity with white acceleration.
+  standing_ = s0;
+  standing_cov_ = s0_cov;
+  Eigen::Matrix4d f = Eigen::Matrix4d::Identity();
+  f(0, 2) = dt;
+  f(1, 3) = dt;
+  const double q = config_.acceleration_sigma * config_.acceleration_sigma;
+  Eigen::Matrix4d noise = Eigen::Matrix4d::Zero();
+  for (int axis = 0; axis < 2; ++axis)
+  {
+    noise(axis, axis) = q * dt * dt * dt * dt / 4.0;
+    noise(axis, axis + 2) = noise(axis + 2, axis) = q * dt * dt * dt / 2.0;
+    noise(axis + 2, axis + 2) = q * dt * dt;
+  }
+  moving_ = f * d0;
+  moving_cov_ = f * d0_cov * f.transpose() + noise;
+  mu_dynamic_ = c_d;
+  grid_log_ratio_ = 0.0;
+}
+
+void MotionModel::update(const Eigen::Vector2d& position)
+{
+  update(position, Eigen::Vector2d::UnitX(), 0.0);
+}
+
+void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Vector2d& axis, double offset)
+{
+  const Eigen::Matrix2d r = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity() +
+                            offset * offset * axis * axis.transpose();
+  // Likelihoods (IMM step 3), then each model's Kalman update.
+  const Eigen::Vector2d nu_s = position - standing_;
+  const Eigen::Matrix2d s_s = standing_cov_ + r;
+  const Eigen::Vector2d nu_d = position - moving_.head<2>();
+  const Eigen::Matrix2d s_d = moving_cov_.topLeftCorner<2, 2>() + r;
+  mu_dynamic_ = posterior(mu_dynamic_, logCauchy2(nu_s, s_s), logCauchy2(nu_d, s_d));
+
+  const Eigen::Matrix2d k_s = standing_cov_ * s_s.inverse();
+  standing_ += k_s * nu_s;
+  standing_cov_ -= k_s * standing_cov_;
+  standing_cov_ = 0.5 * (standing_cov_ + standing_cov_.transpose());
+  const Eigen::Matrix<double, 4, 2> k_d = moving_cov_.leftCols<2>() * s_d.inverse();
+  moving_ += k_d * nu_d;
+  moving_cov_ -= k_d * moving_cov_.topRows<2>();
+  moving_cov_ = 0.5 * (moving_cov_ + moving_cov_.transpose());
+}
+
+void MotionModel::updateGrid(const GridMotionEvidence& grid)
+{
+  const double eps = config_.grid_error;
+  const double share = std::isfinite(grid.dynamic_share) ? std::clamp(grid.dynamic_share, 0.0, 1.0) : 0.5;
+  const double vote = eps + (1.0 - 2.0 * eps) * share;
+  grid_log_ratio_ = std::log(vote) - std::log(1.0 - vote);
+  if (!grid.has_velocity || !grid.velocity.allFinite() || !grid.velocity_variance.allFinite())
+  {
+    return;
+  }
+  const Eigen::Matrix2d spread = grid.velocity_variance.cwiseMax(kMinGridVariance).asDiagonal();
+  const Eigen::Vector2d nu = grid.velocity - moving_.tail<2>();
+  const Eigen::Matrix2d predicted = moving_cov_.bottomRightCorner<2, 2>();
+  grid_log_ratio_ += logCauchy2(nu, spread + predicted) - logCauchy2(grid.velocity, spread);
+  // The cells' velocity as a measurement of the constant-velocity model's: the less of their
+  // mass is dynamic, the less it says.
+  const Eigen::Matrix2d noise = spread / std::max(share, kMinVelocityShare);
+  const Eigen::Matrix2d s = predicted + noise;
+  const Eigen::Matrix<double, 4, 2> k = moving_cov_.rightCols<2>() * s.inverse();
+  moving_ += k * nu;
+  moving_cov_ -= k * moving_cov_.bottomRows<2>();
+  moving_cov_ = 0.5 * (moving_cov_ + moving_cov_.transpose());
+}
+
+double MotionModel::pDynamic() const
+{
+  return posterior(mu_dynamic_, 0.0, grid_log_ratio_);
+}
+
+Eigen::Vector4d MotionModel::state() const
+{
+  Eigen::Vector4d standing;
+  standing << standing_, 0.0, 0.0;
+  return (1.0 - mu_dynamic_) * standing + mu_dynamic_ * moving_;
+}
+
+Eigen::Matrix4d MotionModel::covariance() const
+{
+  const Eigen::Vector4d mean = state();
+  Eigen::Vector4d standing;
+  standing << standing_, 0.0, 0.0;
+  Eigen::Matrix4d standing_cov = Eigen::Matrix4d::Zero();
+  standing_cov.topLeftCorner<2, 2>() = standing_cov_;
+  const Eigen::Vector4d e_s = standing - mean;
+  const Eigen::Vector4d e_d = moving_ - mean;
+  return (1.0 - mu_dynamic_) * (standing_cov + e_s * e_s.transpose()) +
+         mu_dynamic_ * (moving_cov_ + e_d * e_d.transpose());
+}
+
+double MotionModel::distance2(const Eigen::Vector2d& position) const
+{
+  const Eigen::Matrix2d s = covariance().topLeftCorner<2, 2>() +
+                            config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d innovation = position - state().head<2>();
+  return innovation.dot(s.ldlt().solve(innovation));
+}
+
+}  // namespace grid_vision_fusion
