@@ -19,6 +19,22 @@ if(GVF_SANITIZE)
   list(APPEND GVF_WARNINGS -Wno-maybe-uninitialized)
 endif()
 
+# scripts/fuzz.sh: clang only. Every target of the package gets libFuzzer's coverage
+# instrumentation with AddressSanitizer and UndefinedBehaviorSanitizer (-O1 -g, as libFuzzer's
+# documentation advises), and fuzz/fuzz.cmake adds one fuzz_<harness> executable per harness,
+# linked with -fsanitize=fuzzer.
+option(GVF_FUZZ "Build the libFuzzer harnesses of fuzz/ (clang; scripts/fuzz.sh)" OFF)
+if(GVF_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "GVF_FUZZ needs clang (libFuzzer): configure with CC=clang-14 CXX=clang++-14")
+  endif()
+  if(GVF_SANITIZE)
+    message(FATAL_ERROR "GVF_FUZZ brings its own sanitizers: leave GVF_SANITIZE off")
+  endif()
+  set(GVF_SANITIZER_FLAGS -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+    -fno-omit-frame-pointer -g -O1)
+endif()
+
 function(_gvf_common target)
   target_compile_options(${target} PRIVATE ${GVF_WARNINGS} ${GVF_SANITIZER_FLAGS})
   target_link_options(${target} PRIVATE ${GVF_SANITIZER_FLAGS})

@@ -2,54 +2,90 @@
 # libFuzzer campaign over the parsers of outside input (fuzz/fuzz_*.cpp).
 #
 #   scripts/fuzz.sh [seconds] [harness...]
+#   scripts/fuzz.sh --ci [seconds]
 #
-# Installs clang-14 and libfuzzer-14-dev when missing, builds every harness (or those named)
-# with -fsanitize=fuzzer,address,undefined in $GVF_FUZZ_DIR (default
-# ~/.cache/grid_vision_fusion/fuzz), makes each seed corpus from test/data (copied there, the
-# repository is never written), runs the harnesses two at a time for `seconds` each (default
-# 600) and prints executions, seconds, corpus size and findings per harness. Findings (crash-*,
-# leak-*, timeout-*, oom-* files; slow-unit-* ones are listed, not counted) are left in
-# $GVF_FUZZ_DIR/<harness>/findings. Exits non-zero on any finding.
+# Installs clang-14 and its runtime libraries (libFuzzer) when missing, configures the package
+# with clang-14 and -DGVF_FUZZ=ON in $GVF_FUZZ_DIR/build (default GVF_FUZZ_DIR:
+# ~/.cache/grid_vision_fusion/fuzz) and builds the fuzz_<harness> target of every harness (or of
+# those named): the package libraries it links with -fsanitize=fuzzer-no-link,address,undefined,
+# the harness with -fsanitize=fuzzer (fuzz/fuzz.cmake). Then it makes each seed corpus from
+# test/data (copied there, the repository is never written), runs the harnesses two at a time
+# for `seconds` each (default 600) and prints executions, seconds, corpus size and findings per
+# harness. Findings (crash-*, leak-*, timeout-*, oom-* files; slow-unit-* ones are listed, not
+# counted) are left in $GVF_FUZZ_DIR/<harness>/findings. Exits non-zero on any finding.
+#
+# --ci (.ci/run): every harness, 10 s each unless `seconds` is given, and a last line
+# `N passed, M failed` (a harness passes when its run found nothing; a failed build is one failure).
 set -euo pipefail
 
 REPO=$(cd "$(dirname "$0")/.." && pwd)
-SECONDS_EACH=${1:-600}
+CI=0
+if [ "${1:-}" = --ci ]; then
+  CI=1
+  shift
+fi
+SECONDS_EACH=${1:-$((CI ? 10 : 600))}
 shift || true
 WORK=${GVF_FUZZ_DIR:-$HOME/.cache/grid_vision_fusion/fuzz}
+BUILD=$WORK/build
+JOBS=${GVF_JOBS:-$(nproc)}
 ALL_HARNESSES=$(cd "$REPO/fuzz" && ls fuzz_*.cpp | sed 's/^fuzz_//; s/\.cpp$//')
 HARNESSES=${*:-$ALL_HARNESSES}
+# Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
+export PATH=/usr/bin:/bin:$PATH
 
-if ! command -v clang++-14 > /dev/null || [ ! -e /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a ]; then
-  apt-get install -y clang-14 libfuzzer-14-dev
+usage() {
+  echo "usage: $0 [seconds] [harness...] | $0 --ci [seconds]" >&2
+  exit 2
+}
+[[ $SECONDS_EACH =~ ^[0-9]+$ ]] || usage
+if ((CI)) && [ $# -gt 0 ]; then
+  usage
 fi
-
-# --- build: the parser sources once into an archive, then one binary per harness ------------
-CXX=clang++-14
-FLAGS=(-std=c++17 -g -O1 -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
-  -I"$REPO/include" -I/usr/include/eigen3 $(pkg-config --cflags opencv4 yaml-cpp))
-LIBS=($(pkg-config --libs opencv4 yaml-cpp) -lrostime -lcpp_common)
-SOURCES=(src/detection/kitti_labels.cpp src/detection/detection_replay.cpp src/detection/yolo_detector.cpp
-  src/kitti/kitti_calibration.cpp src/kitti/kitti_raw.cpp src/simulation/synthetic_scenario.cpp
-  src/simulation/synthetic_world.cpp src/projection/box_projection.cpp src/ros/sensor_views.cpp)
-mkdir -p "$WORK/obj"
-objects=()
-for source in "${SOURCES[@]}"; do
-  object="$WORK/obj/$(basename "$source" .cpp).o"
-  if [ ! -e "$object" ] || [ "$REPO/$source" -nt "$object" ] || [ -n "$(find "$REPO/include" -newer "$object" -name '*.h' | head -1)" ]; then
-    echo "compiling $source"
-    nice "$CXX" "${FLAGS[@]}" -c "$REPO/$source" -o "$object"
-  fi
-  objects+=("$object")
-done
 for harness in $HARNESSES; do
-  binary="$WORK/bin/fuzz_$harness"
-  mkdir -p "$WORK/bin"
-  if [ ! -e "$binary" ] || [ -n "$(find "$REPO/fuzz" "$REPO/include" "$WORK/obj" -newer "$binary" -type f | head -1)" ]; then
-    echo "building fuzz_$harness"
-    nice "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer "$REPO/fuzz/fuzz_$harness.cpp" "${objects[@]}" "${LIBS[@]}" \
-      -o "$binary"
-  fi
+  [ -e "$REPO/fuzz/fuzz_$harness.cpp" ] || { echo "no harness fuzz/fuzz_$harness.cpp" >&2; usage; }
 done
+fail() {  # fail <message>: a step before the runs failed
+  echo "[fuzz] $1" >&2
+  if ((CI)); then
+    echo "0 passed, 1 failed"
+  fi
+  exit 1
+}
+
+# --- build: the package with clang-14 and -DGVF_FUZZ=ON, only the harnesses and their libraries --
+"$REPO/scripts/install_deps.sh" || fail "installing the dependencies failed"
+if ! command -v clang++-14 > /dev/null ||
+  [ ! -e "$(clang-14 --print-runtime-dir)/libclang_rt.fuzzer-$(uname -m).a" ]; then
+  SUDO=
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  export DEBIAN_FRONTEND=noninteractive
+  { $SUDO apt-get update -qq && $SUDO apt-get install -y -qq --no-install-recommends clang-14 libclang-rt-14-dev; } ||
+    fail "installing clang-14 and libclang-rt-14-dev failed"
+fi
+rm -rf "${WORK:?}/obj" "${WORK:?}/bin"  # the hand-compiled build of this script before the CMake one
+mkdir -p "$BUILD"
+# A build directory configured from another checkout (another worktree) is started afresh.
+if [ -e "$BUILD/CMakeCache.txt" ] &&
+  ! grep -qxF "CMAKE_HOME_DIRECTORY:INTERNAL=$REPO" "$BUILD/CMakeCache.txt"; then
+  echo "[fuzz] $BUILD was configured from another source folder: starting it afresh"
+  rm -rf "$BUILD" && mkdir -p "$BUILD"
+fi
+start=$(date +%s)
+echo "[fuzz] configuring $BUILD (clang-14, -DGVF_FUZZ=ON; log: $WORK/configure.log)"
+CC=clang-14 CXX=clang++-14 nice cmake -S "$REPO" -B "$BUILD" -DGVF_FUZZ=ON -DCMAKE_BUILD_TYPE=Debug \
+  -DCATKIN_ENABLE_TESTING=OFF -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  > "$WORK/configure.log" 2>&1 || { tail -n 40 "$WORK/configure.log"; fail "configuring failed"; }
+configured=$(date +%s)
+targets=()
+for harness in $HARNESSES; do
+  targets+=("fuzz_$harness")
+done
+echo "[fuzz] building ${#targets[@]} harnesses ($JOBS jobs; log: $WORK/build.log)"
+nice cmake --build "$BUILD" --target "${targets[@]}" -j "$JOBS" > "$WORK/build.log" 2>&1 ||
+  { tail -n 60 "$WORK/build.log"; fail "building the harnesses failed"; }
+grep -E '^\[ *[0-9]+%\] (Building|Linking)' "$WORK/build.log" | sed 's/^\[ *[0-9]*%\] /  /' || true
+built=$(date +%s)
 
 # --- seed corpora: files of test/data (and the repository's models and calibration) ---------
 RAW=$REPO/test/data/kitti_raw_2011_09_26
@@ -102,7 +138,7 @@ make_seeds() {
 run_one() {  # run_one <harness>: fuzzes it for SECONDS_EACH, its log in $WORK/<harness>/fuzz.log
   local harness=$1 dir=$WORK/$1
   mkdir -p "$dir/corpus" "$dir/findings"
-  nice -n 19 "$WORK/bin/fuzz_$harness" "$dir/corpus" "$dir/seeds" -max_total_time="$SECONDS_EACH" \
+  nice -n 19 "$BUILD/fuzz/fuzz_$harness" "$dir/corpus" "$dir/seeds" -max_total_time="$SECONDS_EACH" \
     -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=30 -print_final_stats=1 \
     -artifact_prefix="$dir/findings/" > "$dir/fuzz.log" 2>&1 || true
 }
@@ -111,6 +147,7 @@ for harness in $HARNESSES; do
   rm -rf "$WORK/$harness/findings"
 done
 pending=($HARNESSES)
+echo "[fuzz] running ${#pending[@]} harnesses for $SECONDS_EACH s each, two at a time"
 while [ ${#pending[@]} -gt 0 ]; do
   run_one "${pending[0]}" &
   first=$!
@@ -122,8 +159,11 @@ while [ ${#pending[@]} -gt 0 ]; do
   wait $first ${second:+$second}
   pending=("${pending[@]:2}")
 done
+ran=$(date +%s)
 
 status=0
+passed=0
+failed=0
 printf '%-26s %10s %8s %8s %9s\n' harness executions seconds corpus findings
 for harness in $HARNESSES; do
   dir=$WORK/$harness
@@ -135,8 +175,18 @@ for harness in $HARNESSES; do
   find "$dir/findings" -type f -name 'slow-unit-*' -exec echo "  slow unit (not counted): {}" \;
   if [ "$findings" -gt 0 ] || [ -z "$executions" ]; then
     status=1
+    failed=$((failed + 1))
     find "$dir/findings" -type f ! -name 'slow-unit-*' -exec echo "  finding: {}" \;
     [ -n "$executions" ] || echo "  no statistics: see $dir/fuzz.log"
+    if ((CI)); then
+      tail -n 40 "$dir/fuzz.log" | sed 's/^/  | /'
+    fi
+  else
+    passed=$((passed + 1))
   fi
 done
+echo "[fuzz] configure $((configured - start)) s, build $((built - configured)) s, runs $((ran - built)) s"
+if ((CI)); then
+  echo "$passed passed, $failed failed"
+fi
 exit $status
