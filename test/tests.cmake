@@ -126,6 +126,13 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
   COMMAND "${PROJECT_SOURCE_DIR}/scripts/evaluate_suite.sh --devel ${CATKIN_DEVEL_PREFIX} --jobs 2 --scenario-dir ${PROJECT_SOURCE_DIR}/test/data/suite_short --thresholds ${PROJECT_SOURCE_DIR}/test/data/suite_short/thresholds.json --output ${CMAKE_CURRENT_BINARY_DIR}/scenario_suite_short --junit ${GVF_SUITE_RESULT}"
   DEPENDENCIES ${GVF_SUITE_TOOLS})
 
+# --- Python tests of the scripts, no network needed: the result summary's skipped cases.
+foreach(script test_summarize_test_results)
+  set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
+  catkin_run_tests_target("python" "${script}" "python-${script}.xml"
+    COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/scripts/${script}.py --junit ${GVF_SCRIPT_RESULT}")
+endforeach()
+
 # --- fuzzing (scripts/fuzz.sh): the harnesses of fuzz/ over their inputs in test/data/fuzz ------
 file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
 gvf_gtest(test_fuzz_corpus
