@@ -126,8 +126,10 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
   COMMAND "${PROJECT_SOURCE_DIR}/scripts/evaluate_suite.sh --devel ${CATKIN_DEVEL_PREFIX} --jobs 2 --scenario-dir ${PROJECT_SOURCE_DIR}/test/data/suite_short --thresholds ${PROJECT_SOURCE_DIR}/test/data/suite_short/thresholds.json --output ${CMAKE_CURRENT_BINARY_DIR}/scenario_suite_short --junit ${GVF_SUITE_RESULT}"
   DEPENDENCIES ${GVF_SUITE_TOOLS})
 
-# --- Python tests of the scripts, no network needed: the result summary's skipped cases.
-foreach(script test_summarize_test_results)
+# --- Python tests of the scripts, no network needed: the result summary's skipped cases;
+# scripts/tfjs_to_onnx.py on small TF.js graphs the test writes (against a numpy reference, at
+# several input sizes).
+foreach(script test_summarize_test_results test_tfjs_to_onnx)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"
     COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/scripts/${script}.py --junit ${GVF_SCRIPT_RESULT}")
