@@ -127,9 +127,10 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
   DEPENDENCIES ${GVF_SUITE_TOOLS})
 
 # --- Python tests of the scripts, no network needed: the result summary's skipped cases;
+# scripts/fetch_model.sh on local file:// downloads (resume, checksums, errors);
 # scripts/tfjs_to_onnx.py on small TF.js graphs the test writes (against a numpy reference, at
 # several input sizes).
-foreach(script test_summarize_test_results test_tfjs_to_onnx)
+foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"
     COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/scripts/${script}.py --junit ${GVF_SCRIPT_RESULT}")
