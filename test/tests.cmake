@@ -132,7 +132,7 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
 # scripts/tfjs_to_onnx.py on small TF.js graphs the test writes (against a numpy reference, at
 # several input sizes). And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
 # YoloDetector: test_yolo_onnx_model.cpp in test_detection), SKIPPED (listed, never passed)
-# until scripts/fetch_model.sh has fetched it.
+# until scripts/fetch_model.sh has fetched it (doc/detectors.md).
 foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"
