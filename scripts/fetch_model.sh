@@ -191,7 +191,7 @@ download() { # URL FILE ALGORITHM EXPECTED
   fi
   curl --fail --location --silent --show-error --connect-timeout 30 --retry 2 -C - -o "$part" "$url" \
     2>"$work/curl.err" || status=$?
-  message=$(tail -n 1 "$work/curl.err" | sed 's/^curl: //')
+  message=$(tail -n 1 "$work/curl.err" | sed -E 's/^curl: (\([0-9]+\) )?//')
   case $status in
     0) ;;
     5 | 6 | 7 | 28 | 35 | 52 | 55 | 56)

@@ -3,7 +3,7 @@
 YOLOv5-like TF.js graphs written by tfjs_test_graph.py, run with OpenCV's DNN (python3-opencv):
 
 * at the graph's own 64 x 64 input, the ONNX output equals the numpy reference run of the TF
-  graph (boxes scaled from fractions to pixels);
+  graph (boxes scaled from fractions to pixels; left as they are with --source-boxes pixels);
 * at other sizes (64 x 32, 32 x 64, 96 x 64) the rebuilt head equals YOLOv5's box decoding of the
   reference backbone's raw head outputs at that size, cell by cell;
 * on the block-local graph, the same content gives the same boxes at 64 x 64 and 64 x 32 in the
@@ -124,6 +124,15 @@ class ConverterTest(unittest.TestCase):
         self.assertEqual(compared, 3 * (8 * 4 + 4 * 2 + 2 * 1))
         # The boxes really are in pixels and spread over the grid (not fractions).
         self.assertGreater(wide[:, 0].max(), 40.0)
+
+    def test_source_boxes_pixels_leaves_the_box_scales(self):
+        # A model whose boxes are already in pixels (here: read so) keeps its scale constants.
+        image = np.random.default_rng(3).random((1, 64, 64, 3))
+        path = os.path.join(self.dir.name, "pixels.onnx")
+        done = run_converter(self.models["local"][0], path, "--source-boxes", "pixels")
+        self.assertEqual(done.returncode, 0, done.stderr)
+        reference = graph.Reference(self.models["local"][0]).run(image)["Identity"][0]
+        np.testing.assert_allclose(self.forward(path, image), reference, rtol=1e-5, atol=1e-5)
 
     def test_onnx_model_interface(self):
         import onnx
