@@ -186,11 +186,21 @@ download() { # URL FILE ALGORITHM EXPECTED
   fi
   if [[ -s $part ]]; then
     say "resuming $url after $(stat -c %s "$part") bytes"
+    curl --fail --location --silent --show-error --connect-timeout 30 --retry 2 -C - -o "$part" "$url" \
+      2>"$work/curl.err" || status=$?
+    if ((status == 22 || status == 33 || status == 36)); then
+      # The part cannot be resumed (longer than the file, or no byte ranges): start again.
+      say "cannot resume ($(tail -n 1 "$work/curl.err")): downloading $url again"
+      rm -f "$part"
+      status=0
+    fi
   else
     say "downloading $url"
   fi
-  curl --fail --location --silent --show-error --connect-timeout 30 --retry 2 -C - -o "$part" "$url" \
-    2>"$work/curl.err" || status=$?
+  if [[ ! -s $part ]]; then
+    curl --fail --location --silent --show-error --connect-timeout 30 --retry 2 -o "$part" "$url" \
+      2>"$work/curl.err" || status=$?
+  fi
   message=$(tail -n 1 "$work/curl.err" | sed -E 's/^curl: (\([0-9]+\) )?//')
   case $status in
     0) ;;

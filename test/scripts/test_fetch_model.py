@@ -128,6 +128,18 @@ class DarknetTest(FetchTest):
             self.assertEqual(f.read(), data)
         self.assertFalse(os.path.exists(part))
 
+    def test_restarts_a_part_that_cannot_be_resumed(self):
+        # A part longer than the file (e.g. of another version): curl cannot resume it.
+        source, env = self.darknet_env()
+        os.makedirs(self.models)
+        part = os.path.join(self.models, "yolov3-tiny.weights.part")
+        with open(part, "wb") as f:
+            f.write(os.urandom(400000))
+        done = self.fetch("yolov3-tiny", self.models, **env)
+        self.assertEqual(done.returncode, 0, done.stderr)
+        self.assertIn("cannot resume", done.stderr)
+        self.assertEqual(digest(os.path.join(self.models, "yolov3-tiny.weights"), "sha256"), digest(source, "sha256"))
+
     def test_a_resumed_part_is_checked_as_a_whole(self):
         # A part whose start differs from the source: resuming appends the rest, the checksum
         # of the whole fails, the part is deleted (a download from scratch would have passed).
