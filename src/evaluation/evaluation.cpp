@@ -457,7 +457,7 @@ struct TruthTrackState
   double last_change_s = 0.0;
   bool flickered = false;
   // Time to the first dynamic verdict.
-  bool moving_seen = false;  ///< matched once while moving at latency_speed_mps or more...
+  bool moving_seen = false;     ///< matched once while moving at latency_speed_mps or more...
   double moving_since_s = 0.0;  ///< ...at this time
   bool dynamic_seen = false;    ///< reported dynamic at or after moving_since_s
   double latency_s = -1.0;

@@ -113,18 +113,18 @@ std::string jsonLatency(const std::vector<DynamicLatency>& latencies)
   for (const std::string& label : latencyClasses(latencies))
   {
     const LatencyStats s = latencyStats(latencies, label);
-    out += (label.empty() ? "" : ", ") + jsonString(label.empty() ? "all" : label) + ": {\"count\": " +
-           std::to_string(s.count) + ", \"median_s\": " + jsonNumber(s.median_s) + ", \"p90_s\": " +
-           jsonNumber(s.p90_s) + ", \"worst_s\": " + jsonNumber(s.worst_s) +
+    out += (label.empty() ? "" : ", ") + jsonString(label.empty() ? "all" : label) +
+           ": {\"count\": " + std::to_string(s.count) + ", \"median_s\": " + jsonNumber(s.median_s) +
+           ", \"p90_s\": " + jsonNumber(s.p90_s) + ", \"worst_s\": " + jsonNumber(s.worst_s) +
            ", \"never\": " + std::to_string(s.never) + "}";
   }
   out += "}, \"dynamic_latency_tracks\": [";
   for (std::size_t i = 0; i < latencies.size(); ++i)
   {
     const DynamicLatency& l = latencies[i];
-    out += std::string(i ? ", " : "") + "{\"label\": " + jsonString(l.label) + ", \"track_id\": " +
-           std::to_string(l.track_id) + ", \"latency_s\": " +
-           (l.latency_s >= 0.0 ? number(l.latency_s) : std::string("null")) + "}";
+    out += std::string(i ? ", " : "") + "{\"label\": " + jsonString(l.label) +
+           ", \"track_id\": " + std::to_string(l.track_id) +
+           ", \"latency_s\": " + (l.latency_s >= 0.0 ? number(l.latency_s) : std::string("null")) + "}";
   }
   return out + "]";
 }
@@ -345,15 +345,17 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
            "within the window) | flickering tracks |\n|---|---|---|---|---|---|\n"
         << "| " << t.truth_tracks << " | " << t.mostly_tracked << " | " << t.mostly_lost << " | "
         << t.motion_changes << " | " << t.motion_flickers << " | " << t.flickering_tracks << " |\n";
-    out << "\n## Time to the first dynamic verdict\n\nFrom a moving object's first match (truth at the latency speed, 1 m/s by default, or "
+    out << "\n## Time to the first dynamic verdict\n\nFrom a moving object's first match (truth at the "
+           "latency speed, 1 m/s by default, or "
            "more) to its first match reported dynamic [s]; \"never\": not reported dynamic while matched "
-           "(counted as infinite in the percentiles).\n\n| class | objects | median | 90th percentile | worst "
+           "(counted as infinite in the percentiles).\n\n| class | objects | median | 90th percentile | "
+           "worst "
            "| never |\n|---|---|---|---|---|---|\n";
     for (const std::string& label : latencyClasses(t.dynamic_latency))
     {
       const LatencyStats s = latencyStats(t.dynamic_latency, label);
-      out << "| " << (label.empty() ? "all" : label) << " | " << s.count << " | " << seconds(s.median_s) << " | "
-          << seconds(s.p90_s) << " | " << seconds(s.worst_s) << " | " << s.never << " |\n";
+      out << "| " << (label.empty() ? "all" : label) << " | " << s.count << " | " << seconds(s.median_s)
+          << " | " << seconds(s.p90_s) << " | " << seconds(s.worst_s) << " | " << s.never << " |\n";
     }
   }
   return out.str();

@@ -543,8 +543,8 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
     if (lead > 0.0 && lead <= kMaxPoseExtrapolationS)
     {
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(toTransformMsg(poseBefore(poses.front(), records.front(), lead), kWorldFrame,
-                                             kBaseFrame, start));
+      tf.transforms.push_back(
+          toTransformMsg(poseBefore(poses.front(), records.front(), lead), kWorldFrame, kBaseFrame, start));
       write("/tf", start, tf);
     }
 

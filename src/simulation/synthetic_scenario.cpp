@@ -162,8 +162,8 @@ void SyntheticScenario::validate() const
   }
   if (!(oxts_delay_s >= 0.0 && oxts_delay_s < 0.5 / frame_rate_hz))
   {
-    throw std::invalid_argument("oxts_delay must be in [0, half a frame), got " + std::to_string(oxts_delay_s) +
-                                " s");
+    throw std::invalid_argument("oxts_delay must be in [0, half a frame), got " +
+                                std::to_string(oxts_delay_s) + " s");
   }
   lidar.validate();
 }

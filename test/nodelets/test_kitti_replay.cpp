@@ -71,8 +71,10 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
   // Frame 0's scan and image precede the drive's first OXTS record (the scenario's oxts_delay,
   // as on KITTI raw drives): kitti_to_bag gives them a pose, and the first image's objects come.
   EXPECT_TRUE(std::any_of(received.begin(), received.end(),
-                          [&](const DetectedObjectArray::ConstPtr& m)
-                          { return nearestFrame(times, m->header.stamp.toSec(), 0.05) == 0 && !m->objects.empty(); }))
+                          [&](const DetectedObjectArray::ConstPtr& m) {
+                            return nearestFrame(times, m->header.stamp.toSec(), 0.05) == 0 &&
+                                   !m->objects.empty();
+                          }))
       << "no objects for the first image";
   std::vector<EvalObject> detections;
   for (const auto& msg : received)

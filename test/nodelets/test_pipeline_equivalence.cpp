@@ -267,6 +267,8 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
       << "the lazy chain did not subscribe to its inputs";
 
   // In the pipeline's order: per stamp tf, cloud, image, camera_info; each waits for its output.
+  // A frame's pose comes 13 ms after its scan (oxts_delay), and the scan's grid needs it: tf is
+  // sent up to kTfLead ahead of its stamp, as the queue a player fills would hold it by then.
   struct Item
   {
     ros::Time stamp;
@@ -285,14 +287,16 @@ TEST(PipelineEquivalence, SameObjectsAsTheNodeletChain)
                                            : 4;
     items.push_back({m.getTime(), rank, items.size(), std::make_shared<const rosbag::MessageInstance>(m)});
   }
+  const ros::Duration kTfLead(0.05);
+  const auto sent_at = [&](const Item& item) { return item.rank <= 1 ? item.stamp - kTfLead : item.stamp; };
   std::stable_sort(items.begin(), items.end(),
-                   [](const Item& a, const Item& b)
-                   { return a.stamp != b.stamp ? a.stamp < b.stamp : a.rank < b.rank; });
+                   [&](const Item& a, const Item& b)
+                   { return sent_at(a) != sent_at(b) ? sent_at(a) < sent_at(b) : a.rank < b.rank; });
   std::set<ros::Time> image_stamps;
+  rosgraph_msgs::Clock now;  // never back: a tf sent ahead moves it on
   for (const Item& item : items)
   {
-    rosgraph_msgs::Clock now;
-    now.clock = item.stamp;
+    now.clock = std::max(now.clock, item.stamp);
     clock.publish(now);
     const std::string& topic = item.message->getTopic();
     publishers.at(topic).publish(item.message->instantiate<topic_tools::ShapeShifter>());

@@ -196,8 +196,8 @@ struct LatencyStats
   std::size_t count = 0;
   double median_s = 0.0;
   double p90_s = 0.0;
-  double worst_s = 0.0;     ///< +infinity when one was never reported dynamic
-  std::size_t never = 0;    ///< never reported dynamic while matched
+  double worst_s = 0.0;   ///< +infinity when one was never reported dynamic
+  std::size_t never = 0;  ///< never reported dynamic while matched
 };
 LatencyStats latencyStats(const std::vector<DynamicLatency>& latencies, const std::string& label = "");
 

@@ -14,9 +14,9 @@ namespace grid_vision_fusion
 /// Everything a synthetic drive needs.
 struct SyntheticScenario
 {
-  std::uint32_t seed = 42;                  ///< seeds the lidar noise and dropouts
-  double duration_s = 10.0;                 ///< length of the drive [s], > 0
-  double frame_rate_hz = 10.0;              ///< frames per second (KITTI: 10), > 0
+  std::uint32_t seed = 42;      ///< seeds the lidar noise and dropouts
+  double duration_s = 10.0;     ///< length of the drive [s], > 0
+  double frame_rate_hz = 10.0;  ///< frames per second (KITTI: 10), > 0
   /// Each frame's OXTS record is sampled and stamped this much after its scan and image [s],
   /// [0, half a frame): KITTI's raw drives record it about 13 ms later (their first scan has no
   /// earlier pose).
