@@ -180,7 +180,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
     {
       // Admitted by its box alone: the centre estimate jumped (a partly hidden object, or another
       // object's cells). Restart the filters there, keeping what they knew of the motion.
-      track.motion.start(centre, track.motion.modeProbability());
+      track.motion.restartAt(centre);
     }
     track.motion.updateGrid(obs.grid);
     track.box = obs.box;
