@@ -163,6 +163,70 @@ Row scaledRow(std::array<double, 3> eps, double dt, double period)
   row.stay = static_cast<float>(1.0 - q_dt);
   return row;
 }
+
+// The constants of one cycle's cell update (eq. 5-7): the rows of the states S, E, U scaled to dt,
+// the motion-driven shares and 1 / the information of a clear measurement.
+struct CellTransitions
+{
+  Row rs;
+  Row re;
+  Row ru;
+  float u_to_d = 0.0F;           // unknown_to_dynamic_by_motion
+  float start = 0.0F;            // static_to_dynamic_by_motion within dt
+  float inv_information = 0.0F;  // 1 / max(p_occupied - 1/2, 1/2 - p_free)
+};
+
+CellTransitions cellTransitions(const DynamicGridConfig& config, double dt_transition)
+{
+  CellTransitions t;
+  t.rs = scaledRow({config.eps_static_to_dynamic, config.eps_static_to_unknown, 0.0}, dt_transition,
+                   config.transition_period);
+  t.re = scaledRow({config.eps_free_to_static, config.eps_free_to_dynamic, config.eps_free_to_unknown},
+                   dt_transition, config.transition_period);
+  t.ru = scaledRow({config.eps_unknown_to_static, config.eps_unknown_to_dynamic, config.eps_unknown_to_free},
+                   dt_transition, config.transition_period);
+  t.inv_information = 1.0F / static_cast<float>(std::max(config.sensor_model.p_occupied - 0.5,
+                                                         0.5 - config.sensor_model.p_free));
+  t.u_to_d = static_cast<float>(config.unknown_to_dynamic_by_motion);
+  t.start = perInterval(config.static_to_dynamic_by_motion, dt_transition, config.transition_period);
+  return t;
+}
+
+// A cell's masses predicted to this scan (eq. 5), before the mass that left with its particles.
+struct PredictedMasses
+{
+  float s_pred;
+  float d_persistent;  // brought by the particles that arrived (eq. 4)
+  float d_started;     // static mass that started moving
+  float d_newborn;     // d_started included
+  float e_pred;
+  float u_pred;
+};
+
+// Eq. 5 for a cell of masses (s, e, u) measured p_o = po, with motion evidence mu and measurement
+// information lambda; d_persistent, from_static, from_unknown: what its particles brought (eq. 4).
+inline PredictedMasses predictMasses(const CellTransitions& t, float s, float e, float u, float po, float mu,
+                                     float lambda, float d_persistent, float from_static, float from_unknown)
+{
+  const Row& rs = t.rs;
+  const Row& re = t.re;
+  const Row& ru = t.ru;
+  // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
+  // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
+  // a cell measured occupied start moving (a static object does not leave a cell in view).
+  const float u_s = lambda * ru.to[0] * (1.0F - t.u_to_d * mu);
+  const float u_d = lambda * (ru.to[1] + ru.to[0] * t.u_to_d * mu);
+  const float u_e = lambda * ru.to[2];
+  const float s_start = po > 0.5F ? std::min(t.start * mu, rs.stay) : 0.0F;
+  PredictedMasses m;
+  m.s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_static;
+  m.d_persistent = d_persistent;
+  m.d_started = s * s_start;
+  m.d_newborn = s * rs.to[0] + m.d_started + e * re.to[1] + u * u_d;
+  m.e_pred = e * re.stay + u * u_e;
+  m.u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_unknown;
+  return m;
+}
 }  // namespace
 
 double inverseNormalCdf(double p)
@@ -535,103 +599,18 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t_start = Clock::now();
   DynamicGridCycle cycle;
-  if (initialised_)
-  {
-    const double gap = stamp - last_stamp_;
-    if (gap < 0.0 || gap > config_.max_time_gap)
-    {
-      cycle.reset = true;
-      cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
-                                     : "gap of " + std::to_string(gap) +
-                                           " s since the last scan exceeds max_time_gap (" +
-                                           std::to_string(config_.max_time_gap) + " s)";
-      reset();
-    }
-  }
+  resetAfterTimeJump(stamp, cycle);
   const bool first = !initialised_;
   const double dt = first ? 0.0 : stamp - last_stamp_;
   cycle.dt = dt;
 
   // 1. Ego motion: move the grid by whole cells; particles keep their fixed-frame position.
-  std::int64_t col = 0;
-  std::int64_t row = 0;
-  placeGrid(world_from_sensor, col, row);
-  if (first)
-  {
-    geometry_.origin_col = col;
-    geometry_.origin_row = row;
-  }
-  else
-  {
-    cycle.shift_cols = col - geometry_.origin_col;
-    cycle.shift_rows = row - geometry_.origin_row;
-    const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
-    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
-               parallel_);
-    geometry_.origin_col = col;
-    geometry_.origin_row = row;
-    // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the
-    // ages and the motion evidence move with the cells too (cells entering the grid: never seen).
-    const int w = geometry_.width;
-    const int h = geometry_.height;
-    if (cycle.shift_cols == 0 && cycle.shift_rows == 0)
-    {
-      previous_mask_ = occupied_mask_;
-    }
-    else
-    {
-      forRowBlocks(
-          [&](std::size_t, int r_begin, int r_end)
-          {
-            for (int r = r_begin; r < r_end; ++r)
-            {
-              const std::int64_t src_r = r + cycle.shift_rows;
-              for (int c = 0; c < w; ++c)
-              {
-                const std::int64_t src_c = c + cycle.shift_cols;
-                const std::size_t dst = geometry_.index(r, c);
-                if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
-                {
-                  const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
-                                          static_cast<std::size_t>(src_c);
-                  previous_mask_[dst] = occupied_mask_[src];
-                  age_scratch_[dst] = ages_[src];
-                  evidence_scratch_[dst] = motion_evidence_[src];
-                }
-                else
-                {
-                  previous_mask_[dst] = 0;
-                  age_scratch_[dst] = kAgesNever;
-                  evidence_scratch_[dst] = 0.0F;
-                }
-              }
-            }
-          });
-      std::swap(ages_, age_scratch_);
-      std::swap(motion_evidence_, evidence_scratch_);
-    }
-    const float sx = static_cast<float>(static_cast<double>(cycle.shift_cols) * geometry_.resolution);
-    const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
-    if (sx != 0.0F || sy != 0.0F)
-    {
-      const std::size_t n = particles_.size();
-      parallel_.run(blockCount(n, kParticleBlock),
-                    [&](std::size_t b)
-                    {
-                      const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
-                      for (std::size_t i = b * kParticleBlock; i < end; ++i)
-                      {
-                        particles_.x[i] -= sx;
-                        particles_.y[i] -= sy;
-                      }
-                    });
-    }
-  }
+  moveGrid(world_from_sensor, first, cycle);
   initialised_ = true;
   last_stamp_ = stamp;
   ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
 
-  // 2. Inverse sensor model: p_o per cell.
+  // 2. Inverse sensor model: p_o per cell; the cells the scan shows vacated or appearing.
   const Clock::time_point t_model = Clock::now();
   if (cloud.size() > 0)
   {
@@ -647,17 +626,143 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
   // scan has no motion; its transitions use one transition_period so that it counts.
   const double dt_transition = first ? config_.transition_period : dt;
-  const Row rs = scaledRow({config_.eps_static_to_dynamic, config_.eps_static_to_unknown, 0.0}, dt_transition,
-                           config_.transition_period);
-  const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
-                           dt_transition, config_.transition_period);
-  const Row re =
-      scaledRow({config_.eps_free_to_static, config_.eps_free_to_dynamic, config_.eps_free_to_unknown},
-                dt_transition, config_.transition_period);
-  const Row ru =
-      scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
-                dt_transition, config_.transition_period);
+  clearPredictedMasses();
+  if (!first)
+  {
+    const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
+                             dt_transition, config_.transition_period);
+    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
+  }
 
+  // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
+  updateCells(dt_transition);
+
+  // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
+  // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
+  accumulateVelocities(first);
+  estimateCellVelocities();
+
+  // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
+  if (config_.motion_window > 0.0 && config_.propagation_rate > 0.0)
+  {
+    propagateMotion(static_cast<float>(dt_transition));
+  }
+
+  // 8-9. Birth in proportion to the newborn mass, resampling.
+  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
+  ++cycle_;
+  const Clock::time_point t_end = Clock::now();
+  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
+  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
+  return cycle;
+}
+
+void DynamicGridFilter::resetAfterTimeJump(double stamp, DynamicGridCycle& cycle)
+{
+  if (!initialised_)
+  {
+    return;
+  }
+  const double gap = stamp - last_stamp_;
+  if (gap < 0.0 || gap > config_.max_time_gap)
+  {
+    cycle.reset = true;
+    cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
+                                   : "gap of " + std::to_string(gap) +
+                                         " s since the last scan exceeds max_time_gap (" +
+                                         std::to_string(config_.max_time_gap) + " s)";
+    reset();
+  }
+}
+
+void DynamicGridFilter::moveGrid(const Eigen::Isometry3d& world_from_sensor, bool first,
+                                 DynamicGridCycle& cycle)
+{
+  std::int64_t col = 0;
+  std::int64_t row = 0;
+  placeGrid(world_from_sensor, col, row);
+  if (first)
+  {
+    geometry_.origin_col = col;
+    geometry_.origin_row = row;
+    return;
+  }
+  cycle.shift_cols = col - geometry_.origin_col;
+  cycle.shift_rows = row - geometry_.origin_row;
+  const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
+             parallel_);
+  geometry_.origin_col = col;
+  geometry_.origin_row = row;
+  shiftScanMemory(cycle.shift_cols, cycle.shift_rows);
+  shiftParticles(cycle.shift_cols, cycle.shift_rows);
+}
+
+void DynamicGridFilter::shiftScanMemory(std::int64_t shift_cols, std::int64_t shift_rows)
+{
+  // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the ages
+  // and the motion evidence move with the cells too (cells entering the grid: never seen).
+  const int w = geometry_.width;
+  const int h = geometry_.height;
+  if (shift_cols == 0 && shift_rows == 0)
+  {
+    previous_mask_ = occupied_mask_;
+    return;
+  }
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          const std::int64_t src_r = r + shift_rows;
+          for (int c = 0; c < w; ++c)
+          {
+            const std::int64_t src_c = c + shift_cols;
+            const std::size_t dst = geometry_.index(r, c);
+            if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+            {
+              const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                      static_cast<std::size_t>(src_c);
+              previous_mask_[dst] = occupied_mask_[src];
+              age_scratch_[dst] = ages_[src];
+              evidence_scratch_[dst] = motion_evidence_[src];
+            }
+            else
+            {
+              previous_mask_[dst] = 0;
+              age_scratch_[dst] = kAgesNever;
+              evidence_scratch_[dst] = 0.0F;
+            }
+          }
+        }
+      });
+  std::swap(ages_, age_scratch_);
+  std::swap(motion_evidence_, evidence_scratch_);
+}
+
+void DynamicGridFilter::shiftParticles(std::int64_t shift_cols, std::int64_t shift_rows)
+{
+  const float sx = static_cast<float>(static_cast<double>(shift_cols) * geometry_.resolution);
+  const float sy = static_cast<float>(static_cast<double>(shift_rows) * geometry_.resolution);
+  if (sx == 0.0F && sy == 0.0F)
+  {
+    return;
+  }
+  const std::size_t n = particles_.size();
+  parallel_.run(blockCount(n, kParticleBlock),
+                [&](std::size_t b)
+                {
+                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  {
+                    particles_.x[i] -= sx;
+                    particles_.y[i] -= sy;
+                  }
+                });
+}
+
+void DynamicGridFilter::clearPredictedMasses()
+{
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
       {
@@ -668,19 +773,12 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
       });
-  if (!first)
-  {
-    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
-  }
-  ParticleArrays& p = particles_;
+}
 
-  // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
-  const float inv_information = 1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5,
-                                                                   0.5 - config_.sensor_model.p_free));
+void DynamicGridFilter::updateCells(double dt_transition)
+{
+  const CellTransitions t = cellTransitions(config_, dt_transition);
   const bool evidence = config_.motion_window > 0.0;
-  const auto u_to_d = static_cast<float>(config_.unknown_to_dynamic_by_motion);
-  const float start =
-      perInterval(config_.static_to_dynamic_by_motion, dt_transition, config_.transition_period);
   const auto gw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
@@ -689,69 +787,42 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
              ++c)
         {
           const float s = cells_.p_static[c];
-          const float e = cells_.p_free[c];
-          const float u = cells_.p_unknown[c];
           const float po = occupancy_[c];
           const float mu = evidence ? motion_evidence_[c] : 0.0F;
           // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
           // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
           // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
           // instead of drifting to a stale static/free prior while it is shadowed).
-          const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
-          // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
-          // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
-          // a cell measured occupied start moving (a static object does not leave a cell in view).
-          const float u_s = lambda * ru.to[0] * (1.0F - u_to_d * mu);
-          const float u_d = lambda * (ru.to[1] + ru.to[0] * u_to_d * mu);
-          const float u_e = lambda * ru.to[2];
-          const float s_start = po > 0.5F ? std::min(start * mu, rs.stay) : 0.0F;
-          const float s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_dynamic_static_[c];
-          const float d_persistent = pred_dynamic_[c];
-          const float d_started = s * s_start;
-          float d_newborn = s * rs.to[0] + d_started + e * re.to[1] + u * u_d;
-          const float e_pred = e * re.stay + u * u_e;
-          float u_pred =
-              s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
-          const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
+          const float lambda = std::min(std::fabs(po - 0.5F) * t.inv_information, 1.0F);
+          PredictedMasses m =
+              predictMasses(t, s, cells_.p_free[c], cells_.p_unknown[c], po, mu, lambda, pred_dynamic_[c],
+                            from_dynamic_static_[c], from_dynamic_unknown_[c]);
+          const float total = m.s_pred + m.d_persistent + m.d_newborn + m.e_pred + m.u_pred;
           float d_vacated = 0.0F;
           if (total < 1.0F)
           {
-            // The mass that moved out of the cell with its particles. vacated_to_dynamic: in an observed
-            // cell the share q = D / (S + D) (1 - exp(-m^2/2)) -- how much the occupant was believed to
-            // move, times the significance m^2 of the velocity that left -- is the next part of the
-            // moving object (newborn dynamic mass with that velocity), the rest of the observed part is
-            // left to the measurement (renormalised away); unobserved, it becomes unknown.
+            // The mass that moved out of the cell with its particles: part of it newborn dynamic
+            // mass (vacated_to_dynamic), the rest unknown.
             const float hole = 1.0F - total;
             if (config_.vacated_to_dynamic)
             {
-              const float occupied = s + cells_.p_dynamic[c];
-              const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
-              if (lambda > 0.0F && moving_share > 0.0F)  // else 0: no exp for most cells
-              {
-                const float m2 =
-                    velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
-                d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
-              }
-              d_newborn += d_vacated;
-              u_pred += (1.0F - lambda) * hole;
-              left_vx_[c] = cells_.vx[c];
-              left_vy_[c] = cells_.vy[c];
-              left_var_x_[c] = cells_.v_var_x[c];
-              left_var_y_[c] = cells_.v_var_y[c];
+              d_vacated = vacatedToDynamic(c, s, lambda, hole);
+              m.d_newborn += d_vacated;
+              m.u_pred += (1.0F - lambda) * hole;
             }
             else
             {
-              u_pred += hole;  // unknown now
+              m.u_pred += hole;  // unknown now
             }
           }
-          vacated_share_[c] = d_newborn > 0.0F ? d_vacated / d_newborn : 0.0F;
-          start_share_[c] = d_newborn > 0.0F ? d_started / d_newborn : 0.0F;
+          vacated_share_[c] = m.d_newborn > 0.0F ? d_vacated / m.d_newborn : 0.0F;
+          start_share_[c] = m.d_newborn > 0.0F ? m.d_started / m.d_newborn : 0.0F;
           propagated_share_[c] = 0.0F;
-          const float ls = po * s_pred;
-          const float ldp = po * d_persistent;
-          const float ldn = po * d_newborn;
-          const float le = (1.0F - po) * e_pred;
-          const float lu = 0.5F * u_pred;
+          const float ls = po * m.s_pred;
+          const float ldp = po * m.d_persistent;
+          const float ldn = po * m.d_newborn;
+          const float le = (1.0F - po) * m.e_pred;
+          const float lu = 0.5F * m.u_pred;
           const float z = ls + ldp + ldn + le + lu;
           const float inv_z = 1.0F / z;
           cells_.p_static[c] = ls * inv_z;
@@ -771,11 +842,34 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
       });
+}
 
-  // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
-  // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
+inline float DynamicGridFilter::vacatedToDynamic(std::size_t c, float s, float lambda, float hole)
+{
+  // In an observed cell the share q = D / (S + D) (1 - exp(-m^2/2)) of the hole -- how much the
+  // occupant was believed to move, times the significance m^2 of the velocity that left -- is the
+  // next part of the moving object (newborn dynamic mass with that velocity), the rest of the
+  // observed part is left to the measurement (renormalised away); unobserved, it becomes unknown.
+  float d_vacated = 0.0F;
+  const float occupied = s + cells_.p_dynamic[c];
+  const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
+  if (lambda > 0.0F && moving_share > 0.0F)  // else 0: no exp for most cells
+  {
+    const float m2 = velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
+    d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+  }
+  left_vx_[c] = cells_.vx[c];
+  left_vy_[c] = cells_.vy[c];
+  left_var_x_[c] = cells_.v_var_x[c];
+  left_var_y_[c] = cells_.v_var_y[c];
+  return d_vacated;
+}
+
+void DynamicGridFilter::accumulateVelocities(bool first)
+{
   // Per cell sums in particle order, per part of the grid (the split of the prediction: the
   // cells have not changed since).
+  ParticleArrays& p = particles_;
   auto accumulate = [&](std::size_t i)
   {
     const std::int32_t ci = p.cell[i];
@@ -799,7 +893,12 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     splitCellsByParticles(false);  // no prediction on the first scan
   }
   forParticlesByCellPart(accumulate);
+}
+
+void DynamicGridFilter::estimateCellVelocities()
+{
   const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  const auto gw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
       {
@@ -825,20 +924,6 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           }
         }
       });
-
-  // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
-  if (evidence && config_.propagation_rate > 0.0)
-  {
-    propagateMotion(static_cast<float>(dt_transition));
-  }
-
-  // 8-9. Birth in proportion to the newborn mass, resampling.
-  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
-  ++cycle_;
-  const Clock::time_point t_end = Clock::now();
-  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
-  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
-  return cycle;
 }
 
 void DynamicGridFilter::findMotionCells(bool first, float dt)

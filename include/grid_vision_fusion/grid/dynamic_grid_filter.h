@@ -205,7 +205,31 @@ private:
   /// f(block, first_row, end_row) for the blocks of grid rows, in parallel (parallel_).
   template <typename F>
   void forRowBlocks(const F& f) const;
+  /// Resets the filter (and says why in `cycle`) when `stamp` lies before the last scan's or more
+  /// than max_time_gap after it.
+  void resetAfterTimeJump(double stamp, DynamicGridCycle& cycle);
+  /// Step 1, ego motion: places the grid for the sensor pose; after the first scan, moves the
+  /// cells, the scan memory and the particles by the shift (reported in `cycle`).
+  void moveGrid(const Eigen::Isometry3d& world_from_sensor, bool first, DynamicGridCycle& cycle);
+  /// The previous scan's occupied mask, the ages and the motion evidence moved with the grid.
+  void shiftScanMemory(std::int64_t shift_cols, std::int64_t shift_rows);
+  /// The particles moved with the grid, so that they keep their fixed-frame position.
+  void shiftParticles(std::int64_t shift_cols, std::int64_t shift_rows);
+  /// Zeroes the masses the particles carry into the cells (step 3).
+  void clearPredictedMasses();
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
+  /// Steps 4-5 per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split
+  /// (eq. 7), the newborn mass by origin; the sums of step 7 zeroed.
+  void updateCells(double dt_transition);
+  /// The newborn dynamic mass that the mass `hole`, moved out of cell `c` (static mass `s`,
+  /// measurement information `lambda`) with its particles, becomes (vacated_to_dynamic); the
+  /// velocity that left kept for its particles.
+  float vacatedToDynamic(std::size_t c, float s, float lambda, float hole);
+  /// Step 6: persistent weights rescaled to the persistent posterior mass (eq. 8), summed per
+  /// cell with their velocities for step 7.
+  void accumulateVelocities(bool first);
+  /// Step 7: velocity mean and variance given D per cell from the persistent particles (eq. 9).
+  void estimateCellVelocities();
   /// Cuts the grid into one part of whole bands of kRowBlock rows per thread, with about as many
   /// particles each (part_band_). `counted`: block_counts_ already holds the particles per
   /// (particle block, band).
