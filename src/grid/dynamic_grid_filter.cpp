@@ -946,31 +946,53 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
   vacated_.clear();
   if ((evidence && !first) || birth)
   {
-    // Per block of rows, then concatenated in block order: the cells in increasing order.
-    const bool windowed = evidence && !first;
-    const auto uw = static_cast<std::size_t>(geometry_.width);
-    forRowBlocks(
-        [&](std::size_t b, int r_begin, int r_end)
-        {
-          std::vector<std::int32_t>& found = block_candidates_[b];
-          found.clear();
-          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
-               c < static_cast<std::size_t>(r_end) * uw; ++c)
-          {
-            const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
-                                                cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
-                                          : previous_mask_[c] && occupancy_[c] < 0.5F;
-            if (vacated)
-            {
-              found.push_back(static_cast<std::int32_t>(c));
-            }
-          }
-        });
-    for (const std::vector<std::int32_t>& found : block_candidates_)
-    {
-      vacated_.insert(vacated_.end(), found.begin(), found.end());
-    }
+    collectVacatedCells(evidence && !first, window);
   }
+  bucketVacatedCells();
+  if (evidence)
+  {
+    // Motion evidence: 1 in a cell that appeared (holds obstacle points now, was seen clearly
+    // free within the window and believed free) or lies within motion_radius of a vacated cell
+    // (box count on a summed-area table); otherwise the previous evidence decayed by
+    // exp(-dt / motion_memory).
+    const bool any_vacated = markVacatedEdges();
+    sumVacatedCounts();
+    spreadMotionEvidence(dt, any_vacated);
+    markAppearedEdges(window, p_hit);
+  }
+  updateAges(evidence, p_hit);
+  have_previous_ = true;
+}
+
+void DynamicGridFilter::collectVacatedCells(bool windowed, int window)
+{
+  // Per block of rows, then concatenated in block order: the cells in increasing order.
+  const auto uw = static_cast<std::size_t>(geometry_.width);
+  forRowBlocks(
+      [&](std::size_t b, int r_begin, int r_end)
+      {
+        std::vector<std::int32_t>& found = block_candidates_[b];
+        found.clear();
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * uw; c < static_cast<std::size_t>(r_end) * uw;
+             ++c)
+        {
+          const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
+                                              cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
+                                        : previous_mask_[c] && occupancy_[c] < 0.5F;
+          if (vacated)
+          {
+            found.push_back(static_cast<std::int32_t>(c));
+          }
+        }
+      });
+  for (const std::vector<std::int32_t>& found : block_candidates_)
+  {
+    vacated_.insert(vacated_.end(), found.begin(), found.end());
+  }
+}
+
+void DynamicGridFilter::bucketVacatedCells()
+{
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
   bucket_cells_.resize(vacated_.size());
   const auto w = static_cast<std::size_t>(geometry_.width);
@@ -993,165 +1015,182 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
     bucket_cells_[static_cast<std::size_t>(candidates_[bucketOf(c)]++)] = c;
   }
   candidates_.clear();
+}
 
-  if (evidence)
+bool DynamicGridFilter::markVacatedEdges()
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  parallelFill(parallel_, vacated_count_, 0);
+  for (std::int32_t c : vacated_)
   {
-    // Motion evidence: 1 in a cell that appeared (holds obstacle points now, was seen clearly
-    // free within the window and believed free) or lies within motion_radius of a vacated cell
-    // (box count on a summed-area table); otherwise the previous evidence decayed by
-    // exp(-dt / motion_memory).
-    const int gw = geometry_.width;
-    const int gh = geometry_.height;
-    const auto stride = static_cast<std::size_t>(gw + 1);
-    parallelFill(parallel_, vacated_count_, 0);
-    for (std::int32_t c : vacated_)
-    {
-      vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] =
-          1;
-    }
-    // An isolated vacated cell (no other one among its 8 neighbours) is no evidence: what moves
-    // leaves an edge of cells, while sampling artefacts (a sector that misses a surface for one
-    // scan) leave single cells.
-    isolated_.clear();
-    for (std::int32_t c : vacated_)
-    {
-      const int r = c / gw + 1;
-      const int col = c % gw + 1;
-      int neighbours = 0;
-      for (int dr = -1; dr <= 1; ++dr)
-      {
-        for (int dc = -1; dc <= 1; ++dc)
-        {
-          const int rr = r + dr;
-          const int cc = col + dc;
-          if ((dr != 0 || dc != 0) && rr >= 1 && cc >= 1 && rr <= gh && cc <= gw)
-          {
-            neighbours +=
-                vacated_count_[static_cast<std::size_t>(rr) * stride + static_cast<std::size_t>(cc)];
-          }
-        }
-      }
-      if (neighbours == 0)
-      {
-        isolated_.push_back(static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col));
-      }
-    }
-    for (std::size_t i : isolated_)
-    {
-      vacated_count_[i] = 0;
-    }
-    const bool any_vacated = isolated_.size() < vacated_.size();
-    // Summed-area table (integers: exact in any order): prefix sums along the rows, then along
-    // the columns.
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin + 1; r <= r_end; ++r)
-          {
-            std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
-            for (int col = 1; col <= gw; ++col)
-            {
-              row[col] += row[col - 1];
-            }
-          }
-        });
-    constexpr int kColumnBlock = 64;
-    parallel_.run(blockCount(static_cast<std::size_t>(gw), kColumnBlock),
-                  [&](std::size_t b)
-                  {
-                    const int c0 = 1 + static_cast<int>(b) * kColumnBlock;
-                    const int c1 = std::min(gw, c0 + kColumnBlock - 1);
-                    for (int r = 2; r <= gh; ++r)
-                    {
-                      std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
-                      const std::int32_t* above = row - stride;
-                      for (int col = c0; col <= c1; ++col)
-                      {
-                        row[col] += above[col];
-                      }
-                    }
-                  });
-    const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
-    // An appearing surface that was hit next door in the previous scan has not moved there: a
-    // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
-    auto previousHitNear = [&](int r, int col)
-    {
-      for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1); ++rr)
-      {
-        for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1); ++cc)
-        {
-          if (previous_mask_[geometry_.index(rr, cc)])
-          {
-            return true;
-          }
-        }
-      }
-      return false;
-    };
-    const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
-    auto count = [&](int r, int col)
-    { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin; r < r_end; ++r)
-          {
-            const int r0 = std::max(0, r - radius);
-            const int r1 = std::min(gh, r + radius + 1);
-            for (int col = 0; col < gw; ++col)
-            {
-              const std::size_t c = geometry_.index(r, col);
-              float e = decay * motion_evidence_[c];
-              if (any_vacated)
-              {
-                const int c0 = std::max(0, col - radius);
-                const int c1 = std::min(gw, col + radius + 1);
-                if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
-                {
-                  e = 1.0F;
-                }
-              }
-              motion_evidence_[c] = e;
-            }
-          }
-        });
-    // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
-    auto appeared = [&](int r, int col)
-    {
-      const std::size_t c = geometry_.index(r, col);
-      return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
-             !previousHitNear(r, col);
-    };
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin; r < r_end; ++r)
-          {
-            for (int col = 0; col < gw; ++col)
-            {
-              const std::size_t c = geometry_.index(r, col);
-              if (occupancy_[c] < p_hit || !appeared(r, col))
-              {
-                continue;
-              }
-              bool edge = false;
-              for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
-              {
-                for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
-                {
-                  edge = (rr != r || cc != col) && appeared(rr, cc);
-                }
-              }
-              if (edge)
-              {
-                motion_evidence_[c] = 1.0F;
-              }
-            }
-          }
-        });
+    vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] = 1;
   }
-  // Ages: scans since the cell last held obstacle points / was seen clearly free (the first for
-  // the fusion's centre estimate in every mode, both for the motion evidence).
+  // An isolated vacated cell (no other one among its 8 neighbours) is no evidence: what moves
+  // leaves an edge of cells, while sampling artefacts (a sector that misses a surface for one
+  // scan) leave single cells.
+  isolated_.clear();
+  for (std::int32_t c : vacated_)
+  {
+    const int r = c / gw + 1;
+    const int col = c % gw + 1;
+    int neighbours = 0;
+    for (int dr = -1; dr <= 1; ++dr)
+    {
+      for (int dc = -1; dc <= 1; ++dc)
+      {
+        const int rr = r + dr;
+        const int cc = col + dc;
+        if ((dr != 0 || dc != 0) && rr >= 1 && cc >= 1 && rr <= gh && cc <= gw)
+        {
+          neighbours += vacated_count_[static_cast<std::size_t>(rr) * stride + static_cast<std::size_t>(cc)];
+        }
+      }
+    }
+    if (neighbours == 0)
+    {
+      isolated_.push_back(static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col));
+    }
+  }
+  for (std::size_t i : isolated_)
+  {
+    vacated_count_[i] = 0;
+  }
+  return isolated_.size() < vacated_.size();
+}
+
+void DynamicGridFilter::sumVacatedCounts()
+{
+  // Integers: exact in any order. Prefix sums along the rows, then along the columns.
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin + 1; r <= r_end; ++r)
+        {
+          std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+          for (int col = 1; col <= gw; ++col)
+          {
+            row[col] += row[col - 1];
+          }
+        }
+      });
+  constexpr int kColumnBlock = 64;
+  parallel_.run(blockCount(static_cast<std::size_t>(gw), kColumnBlock),
+                [&](std::size_t b)
+                {
+                  const int c0 = 1 + static_cast<int>(b) * kColumnBlock;
+                  const int c1 = std::min(gw, c0 + kColumnBlock - 1);
+                  for (int r = 2; r <= gh; ++r)
+                  {
+                    std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+                    const std::int32_t* above = row - stride;
+                    for (int col = c0; col <= c1; ++col)
+                    {
+                      row[col] += above[col];
+                    }
+                  }
+                });
+}
+
+void DynamicGridFilter::spreadMotionEvidence(float dt, bool any_vacated)
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
+  const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
+  auto count = [&](int r, int col)
+  { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          const int r0 = std::max(0, r - radius);
+          const int r1 = std::min(gh, r + radius + 1);
+          for (int col = 0; col < gw; ++col)
+          {
+            const std::size_t c = geometry_.index(r, col);
+            float e = decay * motion_evidence_[c];
+            if (any_vacated)
+            {
+              const int c0 = std::max(0, col - radius);
+              const int c1 = std::min(gw, col + radius + 1);
+              if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
+              {
+                e = 1.0F;
+              }
+            }
+            motion_evidence_[c] = e;
+          }
+        }
+      });
+}
+
+void DynamicGridFilter::markAppearedEdges(int window, float p_hit)
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  // An appearing surface that was hit next door in the previous scan has not moved there: a
+  // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
+  auto previousHitNear = [&](int r, int col)
+  {
+    for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1); ++rr)
+    {
+      for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1); ++cc)
+      {
+        if (previous_mask_[geometry_.index(rr, cc)])
+        {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
+  auto appeared = [&](int r, int col)
+  {
+    const std::size_t c = geometry_.index(r, col);
+    return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
+           !previousHitNear(r, col);
+  };
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          for (int col = 0; col < gw; ++col)
+          {
+            const std::size_t c = geometry_.index(r, col);
+            if (occupancy_[c] < p_hit || !appeared(r, col))
+            {
+              continue;
+            }
+            bool edge = false;
+            for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
+            {
+              for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
+              {
+                edge = (rr != r || cc != col) && appeared(rr, cc);
+              }
+            }
+            if (edge)
+            {
+              motion_evidence_[c] = 1.0F;
+            }
+          }
+        }
+      });
+}
+
+void DynamicGridFilter::updateAges(bool evidence, float p_hit)
+{
+  // Scans since the cell last held obstacle points / was seen clearly free (the first for the
+  // fusion's centre estimate in every mode, both for the motion evidence).
   const auto uw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
@@ -1165,7 +1204,6 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
           occupied_mask_[c] = (evidence ? occupancy_[c] >= p_hit : occupancy_[c] > 0.5F) ? 1 : 0;
         }
       });
-  have_previous_ = true;
 }
 
 void DynamicGridFilter::propagateMotion(float dt)

@@ -242,6 +242,24 @@ private:
   std::size_t birthAndResample(std::size_t& born, float dt);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
+  /// The vacated cells (vacated_), in increasing order: within the motion window (`windowed`,
+  /// `window` scans) or against the previous scan's mask.
+  void collectVacatedCells(bool windowed, int window);
+  /// The vacated cells sorted by bucket of kBucket x kBucket cells (counting sort).
+  void bucketVacatedCells();
+  /// The vacated cells that have a vacated neighbour, marked in vacated_count_; whether there is
+  /// any.
+  bool markVacatedEdges();
+  /// vacated_count_ into its summed-area table.
+  void sumVacatedCounts();
+  /// Motion evidence 1 within motion_radius of a vacated edge (when `any_vacated`), else the
+  /// previous evidence decayed over `dt`.
+  void spreadMotionEvidence(float dt, bool any_vacated);
+  /// Motion evidence 1 in the cells that appeared (`window` scans, hit p_o >= `p_hit`) next to
+  /// another that appeared.
+  void markAppearedEdges(int window, float p_hit);
+  /// Scans since each cell held obstacle points / was seen clearly free; this scan's occupied mask.
+  void updateAges(bool evidence, float p_hit);
   /// Rigid-object prior (propagation_rate): static mass of occupied cells on the velocity line of
   /// a moving cell becomes newborn dynamic mass with that cell's velocity.
   void propagateMotion(float dt);
