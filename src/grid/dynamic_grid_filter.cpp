@@ -48,47 +48,6 @@ enum Pass : std::uint32_t
   kPassBirth = 3,    // newborn particles
 };
 
-// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
-// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
-// of samples below C. Both use the same comparison, so that counting and stepping agree.
-struct SystematicSamples
-{
-  double u;
-  double step;
-  std::size_t limit;
-
-  bool below(std::size_t k, double cumulative) const
-  {
-    return (u + static_cast<double>(k)) * step < cumulative;
-  }
-
-  std::size_t count(double cumulative) const
-  {
-    const double estimate = std::ceil(cumulative / step - u);
-    std::size_t k =
-        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
-    while (k > 0 && !below(k - 1, cumulative))
-    {
-      --k;
-    }
-    while (k < limit && below(k, cumulative))
-    {
-      ++k;
-    }
-    return k;
-  }
-
-  /// Advances `k` past the samples below `cumulative`, up to `end`.
-  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
-  {
-    while (k < end && below(k, cumulative))
-    {
-      ++k;
-    }
-    return k;
-  }
-};
-
 // Significance of a mean velocity: vx^2 / var_x + vy^2 / var_y (variances floored).
 inline float velocitySignificance(float vx, float vy, float var_x, float var_y)
 {
@@ -227,7 +186,58 @@ inline PredictedMasses predictMasses(const CellTransitions& t, float s, float e,
   m.u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_unknown;
   return m;
 }
+
+// The resampling's items of block b (the n particles in particle_blocks blocks, then the born
+// newborn ones): [begin, end) of the particles' or the newborn ones' arrays.
+void itemRange(std::size_t b, std::size_t particle_blocks, std::size_t n, std::size_t born,
+               std::size_t& begin, std::size_t& end)
+{
+  const std::size_t size = b < particle_blocks ? n : born;
+  begin = (b < particle_blocks ? b : b - particle_blocks) * kParticleBlock;
+  end = std::min(size, begin + kParticleBlock);
+}
 }  // namespace
+
+// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
+// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
+// of samples below C. Both use the same comparison, so that counting and stepping agree.
+struct DynamicGridFilter::SystematicSamples
+{
+  double u;
+  double step;
+  std::size_t limit;
+
+  bool below(std::size_t k, double cumulative) const
+  {
+    return (u + static_cast<double>(k)) * step < cumulative;
+  }
+
+  std::size_t count(double cumulative) const
+  {
+    const double estimate = std::ceil(cumulative / step - u);
+    std::size_t k =
+        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
+    while (k > 0 && !below(k - 1, cumulative))
+    {
+      --k;
+    }
+    while (k < limit && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+
+  /// Advances `k` past the samples below `cumulative`, up to `end`.
+  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
+  {
+    while (k < end && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+};
 
 double inverseNormalCdf(double p)
 {
@@ -1360,10 +1370,14 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   BlockRandom cycle_rng(config_.seed, cycle_, kPassCycle, 0);
   const float u_birth = cycle_rng.uniform();
   const float u_resample = cycle_rng.uniform();
+  born = sampleBirths(u_birth, dt);
+  return resample(u_resample, born);
+}
 
+std::size_t DynamicGridFilter::sampleBirths(float u_birth, float dt)
+{
   // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
-  // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
-  // of cell c weighs newborn_c / n_c, is uniform in the cell, with v ~ N(0, sigma_b^2 I).
+  // occupied (p_o > 0.5) by systematic sampling of their newborn mass.
   const auto gw = static_cast<std::size_t>(geometry_.width);
   const std::size_t row_blocks = blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock);
   forRowBlocks(
@@ -1379,102 +1393,116 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
       });
   const double newborn_total = blockStarts(block_sum_, row_blocks, block_start_);
   const std::size_t capacity = birth_cell_.size();
-  born = 0;
-  if (newborn_total > 1e-9)
+  if (!(newborn_total > 1e-9))
   {
-    const double step = newborn_total / static_cast<double>(capacity);
-    const SystematicSamples samples{u_birth, step, capacity};
-    born = samples.count(newborn_total);
-    const float res = static_cast<float>(geometry_.resolution);
-    const float sb = static_cast<float>(config_.birth_velocity_sigma);
-    const auto fraction = static_cast<float>(config_.birth_motion_fraction);
-    forRowBlocks(
-        [&](std::size_t b, int r_begin, int r_end)
-        {
-          const std::size_t c_begin = static_cast<std::size_t>(r_begin) * gw;
-          std::size_t c_last = static_cast<std::size_t>(r_end) * gw;  // the block's last cell with mass
-          while (c_last > c_begin && newborn_[c_last - 1] <= 0.0F)
-          {
-            --c_last;
-          }
-          if (c_last == c_begin)
-          {
-            return;
-          }
-          --c_last;
-          BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
-          std::vector<std::int32_t>& candidates = block_candidates_[b];
-          const std::size_t block_end = samples.count(block_start_[b + 1]);
-          double cumulative = block_start_[b];
-          std::size_t first = samples.count(cumulative);
-          for (std::size_t c = c_begin; c <= c_last; ++c)
-          {
-            if (newborn_[c] <= 0.0F)
-            {
-              continue;
-            }
-            cumulative += newborn_[c];
-            const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
-            const std::size_t count = end - first;
-            if (count == 0)
-            {
-              continue;
-            }
-            const float w = newborn_[c] / static_cast<float>(count);
-            const int row = static_cast<int>(c / gw);
-            const int col = static_cast<int>(c % gw);
-            const bool appearing = !vacated_.empty() && !previous_mask_[c];
-            // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity),
-            // vacated (the velocity that left the cell), started (a motion-driven velocity); the
-            // rest takes the cell's velocity estimate where it has persistent particles and motion
-            // evidence (inherit_birth_velocity), a motion-driven velocity in an appearing cell
-            // (birth_motion_fraction), else a random one.
-            const float to_propagated = propagated_share_[c];
-            const float to_vacated = to_propagated + vacated_share_[c];
-            const float to_started = to_vacated + start_share_[c];
-            const bool inherit =
-                config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
-            for (std::size_t k = first; k < end; ++k)
-            {
-              birth_cell_[k] = static_cast<std::int32_t>(c);
-              birth_x_[k] = (static_cast<float>(col) + rng.uniform()) * res;
-              birth_y_[k] = (static_cast<float>(row) + rng.uniform()) * res;
-              const float origin = to_started > 0.0F ? rng.uniform() : 1.0F;
-              if (origin < to_propagated)
-              {
-                birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normalSample(rng);
-                birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normalSample(rng);
-              }
-              else if (origin < to_vacated)
-              {
-                birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normalSample(rng);
-                birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normalSample(rng);
-              }
-              else if (origin < to_started && motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k],
-                                                             birth_vy_[k], rng, candidates))
-              {
-              }
-              else if (inherit)
-              {
-                birth_vx_[k] = cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) *
-                                                  normalSample(rng);
-                birth_vy_[k] = cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) *
-                                                  normalSample(rng);
-              }
-              else if (!(appearing && rng.uniform() < fraction &&
-                         motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng,
-                                        candidates)))
-              {
-                birth_vx_[k] = sb * normalSample(rng);
-                birth_vy_[k] = sb * normalSample(rng);
-              }
-              birth_w_[k] = w;
-            }
-            first = end;
-          }
-        });
+    return 0;
   }
+  const double step = newborn_total / static_cast<double>(capacity);
+  const SystematicSamples samples{u_birth, step, capacity};
+  forRowBlocks([&](std::size_t b, int r_begin, int r_end)
+               { birthInRowBlock(b, r_begin, r_end, samples, dt); });
+  return samples.count(newborn_total);
+}
 
+void DynamicGridFilter::birthInRowBlock(std::size_t b, int r_begin, int r_end,
+                                        const SystematicSamples& samples, float dt)
+{
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  const std::size_t c_begin = static_cast<std::size_t>(r_begin) * gw;
+  std::size_t c_last = static_cast<std::size_t>(r_end) * gw;  // the block's last cell with mass
+  while (c_last > c_begin && newborn_[c_last - 1] <= 0.0F)
+  {
+    --c_last;
+  }
+  if (c_last == c_begin)
+  {
+    return;
+  }
+  --c_last;
+  BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
+  std::vector<std::int32_t>& candidates = block_candidates_[b];
+  const std::size_t block_end = samples.count(block_start_[b + 1]);
+  double cumulative = block_start_[b];
+  std::size_t first = samples.count(cumulative);
+  for (std::size_t c = c_begin; c <= c_last; ++c)
+  {
+    if (newborn_[c] <= 0.0F)
+    {
+      continue;
+    }
+    cumulative += newborn_[c];
+    const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
+    if (end - first == 0)
+    {
+      continue;
+    }
+    bearParticles(c, first, end, dt, rng, candidates);
+    first = end;
+  }
+}
+
+void DynamicGridFilter::bearParticles(std::size_t c, std::size_t first, std::size_t end, float dt,
+                                      BlockRandom& rng, std::vector<std::int32_t>& candidates)
+{
+  // Each newborn particle of cell c weighs newborn_c / n_c and is uniform in the cell.
+  const float res = static_cast<float>(geometry_.resolution);
+  const float sb = static_cast<float>(config_.birth_velocity_sigma);
+  const auto fraction = static_cast<float>(config_.birth_motion_fraction);
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  const std::size_t count = end - first;
+  const float w = newborn_[c] / static_cast<float>(count);
+  const int row = static_cast<int>(c / gw);
+  const int col = static_cast<int>(c % gw);
+  const bool appearing = !vacated_.empty() && !previous_mask_[c];
+  // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity), vacated
+  // (the velocity that left the cell), started (a motion-driven velocity); the rest takes the
+  // cell's velocity estimate where it has persistent particles and motion evidence
+  // (inherit_birth_velocity), a motion-driven velocity in an appearing cell
+  // (birth_motion_fraction), else a random one, v ~ N(0, sigma_b^2 I).
+  const float to_propagated = propagated_share_[c];
+  const float to_vacated = to_propagated + vacated_share_[c];
+  const float to_started = to_vacated + start_share_[c];
+  const bool inherit =
+      config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
+  for (std::size_t k = first; k < end; ++k)
+  {
+    birth_cell_[k] = static_cast<std::int32_t>(c);
+    birth_x_[k] = (static_cast<float>(col) + rng.uniform()) * res;
+    birth_y_[k] = (static_cast<float>(row) + rng.uniform()) * res;
+    const float origin = to_started > 0.0F ? rng.uniform() : 1.0F;
+    if (origin < to_propagated)
+    {
+      birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normalSample(rng);
+      birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normalSample(rng);
+    }
+    else if (origin < to_vacated)
+    {
+      birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normalSample(rng);
+      birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normalSample(rng);
+    }
+    else if (origin < to_started &&
+             motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng, candidates))
+    {
+    }
+    else if (inherit)
+    {
+      birth_vx_[k] =
+          cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) * normalSample(rng);
+      birth_vy_[k] =
+          cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) * normalSample(rng);
+    }
+    else if (!(appearing && rng.uniform() < fraction &&
+               motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng, candidates)))
+    {
+      birth_vx_[k] = sb * normalSample(rng);
+      birth_vy_[k] = sb * normalSample(rng);
+    }
+    birth_w_[k] = w;
+  }
+}
+
+std::size_t DynamicGridFilter::resample(float u_resample, std::size_t born)
+{
   // Eq. 11: systematic resampling of the persistent and newborn particles to N particles of
   // equal weight W / N, W = their total weight (the dynamic mass carried stays the same). The
   // items: the particles, then the newborn ones, in blocks of kParticleBlock.
@@ -1482,19 +1510,12 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   const std::size_t n = p.size();
   const std::size_t particle_blocks = blockCount(n, kParticleBlock);
   const std::size_t item_blocks = particle_blocks + blockCount(born, kParticleBlock);
-  // Item i of block b: weight, and its state.
-  auto itemRange = [&](std::size_t b, std::size_t& begin, std::size_t& end)
-  {
-    const std::size_t size = b < particle_blocks ? n : born;
-    begin = (b < particle_blocks ? b : b - particle_blocks) * kParticleBlock;
-    end = std::min(size, begin + kParticleBlock);
-  };
   parallel_.run(item_blocks,
                 [&](std::size_t b)
                 {
                   std::size_t begin = 0;
                   std::size_t end = 0;
-                  itemRange(b, begin, end);
+                  itemRange(b, particle_blocks, n, born, begin, end);
                   const float* weight = b < particle_blocks ? p.weight.data() : birth_w_.data();
                   double sum = 0.0;
                   for (std::size_t i = begin; i < end; ++i)
@@ -1514,61 +1535,64 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
     return 0;
   }
   const double step = total / static_cast<double>(n);
-  const auto w_out = static_cast<float>(step);
   const SystematicSamples samples{u_resample, step, n};
   const std::size_t in_use = samples.count(total);
-  ParticleArrays& r = resampled_;
-  parallel_.run(item_blocks,
-                [&](std::size_t b)
-                {
-                  std::size_t begin = 0;
-                  std::size_t end = 0;
-                  itemRange(b, begin, end);
-                  const bool newborn = b >= particle_blocks;
-                  const float* x = newborn ? birth_x_.data() : p.x.data();
-                  const float* y = newborn ? birth_y_.data() : p.y.data();
-                  const float* vx = newborn ? birth_vx_.data() : p.vx.data();
-                  const float* vy = newborn ? birth_vy_.data() : p.vy.data();
-                  const float* weight = newborn ? birth_w_.data() : p.weight.data();
-                  const std::int32_t* cell = newborn ? birth_cell_.data() : p.cell.data();
-                  std::size_t last = end;  // the block's last item with weight
-                  while (last > begin && !(weight[last - 1] > 0.0F))
-                  {
-                    --last;
-                  }
-                  if (last == begin)
-                  {
-                    return;
-                  }
-                  --last;
-                  const std::size_t block_end = samples.count(block_start_[b + 1]);
-                  double cumulative = block_start_[b];
-                  std::size_t out = samples.count(cumulative);
-                  for (std::size_t i = begin; i <= last; ++i)
-                  {
-                    if (!(weight[i] > 0.0F))
-                    {
-                      continue;
-                    }
-                    cumulative += weight[i];
-                    const std::size_t out_end =
-                        i == last ? block_end : samples.advance(out, cumulative, block_end);
-                    for (; out < out_end; ++out)
-                    {
-                      r.x[out] = x[i];
-                      r.y[out] = y[i];
-                      r.vx[out] = vx[i];
-                      r.vy[out] = vy[i];
-                      r.weight[out] = w_out;
-                      r.cell[out] = cell[i];
-                    }
-                  }
-                });
+  parallel_.run(item_blocks, [&](std::size_t b) { resampleBlock(b, particle_blocks, born, samples); });
   // Rounding at the very end: no particle left to copy.
+  ParticleArrays& r = resampled_;
   std::fill(r.weight.begin() + static_cast<std::ptrdiff_t>(in_use), r.weight.end(), 0.0F);
   std::fill(r.cell.begin() + static_cast<std::ptrdiff_t>(in_use), r.cell.end(), -1);
   std::swap(particles_, resampled_);
   return in_use;
+}
+
+void DynamicGridFilter::resampleBlock(std::size_t b, std::size_t particle_blocks, std::size_t born,
+                                      const SystematicSamples& samples)
+{
+  const ParticleArrays& p = particles_;
+  ParticleArrays& r = resampled_;
+  const auto w_out = static_cast<float>(samples.step);
+  std::size_t begin = 0;
+  std::size_t end = 0;
+  itemRange(b, particle_blocks, p.size(), born, begin, end);
+  const bool newborn = b >= particle_blocks;
+  const float* x = newborn ? birth_x_.data() : p.x.data();
+  const float* y = newborn ? birth_y_.data() : p.y.data();
+  const float* vx = newborn ? birth_vx_.data() : p.vx.data();
+  const float* vy = newborn ? birth_vy_.data() : p.vy.data();
+  const float* weight = newborn ? birth_w_.data() : p.weight.data();
+  const std::int32_t* cell = newborn ? birth_cell_.data() : p.cell.data();
+  std::size_t last = end;  // the block's last item with weight
+  while (last > begin && !(weight[last - 1] > 0.0F))
+  {
+    --last;
+  }
+  if (last == begin)
+  {
+    return;
+  }
+  --last;
+  const std::size_t block_end = samples.count(block_start_[b + 1]);
+  double cumulative = block_start_[b];
+  std::size_t out = samples.count(cumulative);
+  for (std::size_t i = begin; i <= last; ++i)
+  {
+    if (!(weight[i] > 0.0F))
+    {
+      continue;
+    }
+    cumulative += weight[i];
+    const std::size_t out_end = i == last ? block_end : samples.advance(out, cumulative, block_end);
+    for (; out < out_end; ++out)
+    {
+      r.x[out] = x[i];
+      r.y[out] = y[i];
+      r.vx[out] = vx[i];
+      r.vy[out] = vy[i];
+      r.weight[out] = w_out;
+      r.cell[out] = cell[i];
+    }
+  }
 }
 
 void DynamicGridFilter::setClassification(const DynamicGridConfig& thresholds)

@@ -201,6 +201,9 @@ public:
   CellClass classify(std::size_t index) const;
 
 private:
+  /// A systematic sampling of the birth and of the resampling (defined with them).
+  struct SystematicSamples;
+
   void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
   /// f(block, first_row, end_row) for the blocks of grid rows, in parallel (parallel_).
   template <typename F>
@@ -239,7 +242,23 @@ private:
   /// makes add each cell's particles in particle order, as one thread does, whatever the split.
   template <typename F>
   void forParticlesByCellPart(const F& f) const;
+  /// Steps 8-9: birth in proportion to the newborn mass (`born` newborn particles), then
+  /// resampling; returns the particles in use.
   std::size_t birthAndResample(std::size_t& born, float dt);
+  /// Step 8 (eq. 10): the newborn particles, systematic samples of the cells' newborn mass from
+  /// the offset `u_birth`; returns their count.
+  std::size_t sampleBirths(float u_birth, float dt);
+  /// The newborn particles of the cells of row block `b` (rows [r_begin, r_end)).
+  void birthInRowBlock(std::size_t b, int r_begin, int r_end, const SystematicSamples& samples, float dt);
+  /// Newborn particles [first, end) in cell `c`: position, weight and a velocity by origin.
+  void bearParticles(std::size_t c, std::size_t first, std::size_t end, float dt, BlockRandom& rng,
+                     std::vector<std::int32_t>& candidates);
+  /// Step 9 (eq. 11): systematic resampling of the particles and the `born` newborn ones from the
+  /// offset `u_resample`; returns the particles in use.
+  std::size_t resample(float u_resample, std::size_t born);
+  /// The resampled copies of the items of block `b` (resample()).
+  void resampleBlock(std::size_t b, std::size_t particle_blocks, std::size_t born,
+                     const SystematicSamples& samples);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
   /// The vacated cells (vacated_), in increasing order: within the motion window (`windowed`,
