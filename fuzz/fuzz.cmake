@@ -11,6 +11,8 @@ set(GVF_FUZZ_LIBRARY_kitti grid_vision_fusion_kitti)
 set(GVF_FUZZ_LIBRARY_evaluation grid_vision_fusion_evaluation)
 set(GVF_FUZZ_LIBRARY_simulation grid_vision_fusion_simulation)
 set(GVF_FUZZ_LIBRARY_ros grid_vision_fusion_ros)
+set(GVF_FUZZ_LIBRARY_ros_stages grid_vision_fusion_ros)
+set(GVF_FUZZ_LIBRARY_ros_sync grid_vision_fusion_ros)
 set(GVF_FUZZ_LIBRARY_offline grid_vision_fusion_offline)
 
 file(GLOB GVF_FUZZ_HARNESS_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
