@@ -140,8 +140,9 @@ foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model te
 endforeach()
 
 # --- fuzzing (scripts/fuzz.sh): the harnesses of fuzz/ over their inputs in test/data/fuzz ------
-file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
+file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/*/fuzz_*.cpp)
 gvf_gtest(test_fuzz_corpus
   SOURCES test/fuzz/test_fuzz_corpus.cpp ${GVF_FUZZ_HARNESS_SOURCES}
   LINK grid_vision_fusion_ros grid_vision_fusion_simulation
   DEFINITIONS GVF_FUZZ_CORPUS_TEST)
+target_include_directories(test_fuzz_corpus PRIVATE ${PROJECT_SOURCE_DIR}/fuzz)  # fuzz_input.h
