@@ -45,7 +45,7 @@ gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_
 # --- ROS layer and offline (no master) ---------------------------------------------------------
 gvf_gtest(test_ros
   SOURCES test/ros/test_fusion_conversions.cpp test/ros/test_param_source.cpp test/ros/test_node_params.cpp
-    test/ros/test_stages.cpp test/ros/test_tf_wait_queue.cpp test/ros/test_grid_for_image.cpp
+    test/ros_stages/test_stages.cpp test/ros_sync/test_tf_wait_queue.cpp test/ros_sync/test_grid_for_image.cpp
   LINK grid_vision_fusion_ros grid_vision_fusion_offline)
 gvf_gtest(test_offline
   SOURCES test/offline/test_detection_bag.cpp test/offline/test_kitti_bag_writer.cpp
@@ -140,8 +140,9 @@ foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model te
 endforeach()
 
 # --- fuzzing (scripts/fuzz.sh): the harnesses of fuzz/ over their inputs in test/data/fuzz ------
-file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
+file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/*/fuzz_*.cpp)
 gvf_gtest(test_fuzz_corpus
   SOURCES test/fuzz/test_fuzz_corpus.cpp ${GVF_FUZZ_HARNESS_SOURCES}
   LINK grid_vision_fusion_ros grid_vision_fusion_simulation
   DEFINITIONS GVF_FUZZ_CORPUS_TEST)
+target_include_directories(test_fuzz_corpus PRIVATE ${PROJECT_SOURCE_DIR}/fuzz)  # fuzz_input.h
