@@ -115,6 +115,13 @@ private:
     double first_stamp = 0.0;
   };
 
+  /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
+  /// optimal assignment.
+  std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
+  /// A matched track takes its observation: the centre (or a restart there), the grid's evidence.
+  void updateTrack(Track& track, const TrackObservation& observation) const;
+  /// A tentative track for an observation left over.
+  Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
   /// Squared Mahalanobis distance of the observation from the track's predicted position, with
   /// the association noise position_sigma.
