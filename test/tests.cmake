@@ -67,6 +67,8 @@ gvf_rostest(test_yolo_detector_nodelet LAUNCH test/nodelets/yolo_detector_nodele
   SOURCES test/nodelets/test_yolo_detector_nodelet.cpp LINK gvf_tiny_darknet)
 gvf_rostest(test_yolo_replay_nodelet LAUNCH test/nodelets/yolo_replay_nodelet.test
   SOURCES test/nodelets/test_yolo_replay_nodelet.cpp)
+gvf_rostest(test_yolo_replay_noise_nodelet LAUNCH test/nodelets/yolo_replay_noise_nodelet.test
+  SOURCES test/nodelets/test_yolo_replay_noise_nodelet.cpp LINK grid_vision_fusion_ros)
 gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_nodelet.test
   SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
 gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test

@@ -136,8 +136,8 @@ struct DetectionNoiseConfig
   double cyclist_to_pedestrian = 0.818;
 
   /// Mean count (Poisson) of extra boxes on a found object with a score >= min_score, [0, 100]:
-  /// a partial box of it, its label drawn through the confusion again, its score from the false
-  /// positives' score model.
+  /// a partial box of it with its own edge errors (also when box_jitter is off), its label drawn
+  /// through the confusion again, its score from the false positives' score model.
   double extra_rate = 0.850;
 
   FalsePositiveNoise background{4.379, -4.267, 1.873, 25.785, 0.681, 0.464, 0.802,
