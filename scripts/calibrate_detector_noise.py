@@ -573,20 +573,33 @@ def main():
         for vehicles in (True, False):
             hs, errs = edge_errors(e_index, vehicles)
             frac = errs / hs
+            if errs.size == 0:
+                if vehicles:
+                    sys.exit("calibrate_detector_noise: no full box of a vehicle with its %s edge off the image "
+                             "border: nothing to fit" % edge)
+                edge_rows.append([edge, "people", 0] + ["-"] * 9)
+                continue
             if vehicles:
                 bias = float(np.median(frac))
                 a, b = fit_sigma(hs, errs - bias * hs)
-                r = (errs - bias * hs) / np.sqrt(a * a + (b * hs) ** 2)
-                s1, s2, p = fit_scale_mixture(r)
+                if a > 1e-9 or b > 1e-9:
+                    r = (errs - bias * hs) / np.sqrt(a * a + (b * hs) ** 2)
+                    s1, s2, p = fit_scale_mixture(r)
+                else:  # no spread at all (hand-made data)
+                    s1, s2, p = 1.0, 1.0, 0.0
                 edge_fit[edge] = {"bias": bias, "sigma_px": s1 * a, "sigma_fraction": s1 * b,
                                   "tail_probability": p, "tail_scale": s2 / s1, "n": int(errs.size)}
                 vehicle_spread = float(np.mean(np.abs(frac - bias)))
                 fit = "%.2f px, %.3f h" % (s1 * a, s1 * b)
                 tails = "%.3f x %.1f" % (p, s2 / s1)
             else:
-                ratio = float(np.mean(np.abs(frac - edge_fit[edge]["bias"]))) / vehicle_spread
-                person_ratios.append(ratio)
-                fit, tails = "mean abs deviation %.2f x the vehicles'" % ratio, ""
+                if vehicle_spread <= 0.0:
+                    fit, tails = "-", ""
+                else:
+                    ratio = float(np.mean(np.abs(frac - edge_fit[edge]["bias"]))) / vehicle_spread
+                    if ratio > 0.0:
+                        person_ratios.append(ratio)
+                    fit, tails = "mean abs deviation %.2f x the vehicles'" % ratio, ""
             q = np.quantile(frac, [0.01, 0.05, 0.25, 0.5, 0.75, 0.95, 0.99])
             edge_rows.append([edge, "vehicles" if vehicles else "people", errs.size, "%+.2f" % np.mean(errs),
                               "%+.2f" % np.median(errs), "%.2f" % robust_sigma(errs), "%.2f" % np.std(errs),
@@ -598,7 +611,7 @@ def main():
             sel = np.array([height_bin(v) == i for v in hs_all], bool)
             by_height_rows[bname].append("%+.1f / %.1f (%d)" % (np.median(errs_all[sel]), robust_sigma(errs_all[sel]),
                                                                 sel.sum()) if sel.sum() else "-")
-    person_scale = float(np.exp(np.mean(np.log(person_ratios))))
+    person_scale = float(np.exp(np.mean(np.log(person_ratios)))) if person_ratios else 1.0
     print(table(edge_rows, ["edge", "labels", "n", "mean", "median", "sigma (1.48 MAD)", "std", "median / h",
                             "sigma / h", "quantiles / h 1 5 25 50 75 95 99 %", "core sigma fit",
                             "tails: probability x scale"]) + "\n")
