@@ -249,6 +249,149 @@ Detection makeDetection(int label, double score, const BoundingBox& box)
   return d;
 }
 
+/// What every step of one frame's noise needs.
+struct NoiseFrame
+{
+  const DetectionNoiseConfig& c;
+  std::int64_t frame;
+  std::uint32_t width;
+  std::uint32_t height;
+};
+
+/// The label's occlusion level, 0..3.
+int occlusionOf(const NoiseLabel& in)
+{
+  return std::clamp(in.occluded, 0, 3);
+}
+
+/// The label's box height [px].
+double heightOf(const NoiseLabel& in)
+{
+  return static_cast<double>(in.detection.box.y_max - in.detection.box.y_min);
+}
+
+/// Whether the label gets a box (the misses component; `score` its score). Labels the model does
+/// not know and hidden ones (occlusion 3) as configured.
+bool drawPresence(const NoiseFrame& f, const NoiseLabel& in, double& score)
+{
+  const DetectionNoiseConfig& c = f.c;
+  if (!c.misses)
+  {
+    return true;
+  }
+  const int original = labelIndex(in.detection.label);
+  if (original < 0)
+  {
+    return c.keep_other_labels;
+  }
+  const int occlusion = occlusionOf(in);
+  if (occlusion == 3 && !c.fully_occluded_detected)
+  {
+    return false;
+  }
+  const auto label = static_cast<std::size_t>(original);
+  const double height = heightOf(in);
+  const double truncated = std::clamp(static_cast<double>(in.truncated), 0.0, 1.0);
+  NoiseStream presence(c.seed, f.frame, Stream::kPresence, in.line);
+  if (!presence.bernoulli(sigmoid(c.presence.predictor(label, height, occlusion, truncated))))
+  {
+    return false;
+  }
+  NoiseStream stream(c.seed, f.frame, Stream::kScore, in.line);
+  score = drawScore(c, c.score.predictor(label, height, occlusion, truncated), c.score_sigma, stream);
+  return true;
+}
+
+/// The label's box under the confusion, partial-box and jitter components (not clipped).
+Detection noisyBox(const NoiseFrame& f, const NoiseLabel& in, double score)
+{
+  const DetectionNoiseConfig& c = f.c;
+  const int original = labelIndex(in.detection.label);
+  Detection detection = in.detection;
+  detection.score = static_cast<float>(score);
+  if (c.confusion && original >= 0)
+  {
+    NoiseStream stream(c.seed, f.frame, Stream::kConfusion, in.line);
+    const int label = confuse(c, original, stream);
+    detection.label = noiseModelLabels()[static_cast<std::size_t>(label)];
+    detection.class_id = noiseClassId(detection.label);
+  }
+  if (c.partial_boxes)
+  {
+    NoiseStream stream(c.seed, f.frame, Stream::kPartial, in.line);
+    const std::array<double, 3> p{c.partial_occlusion0, c.partial_occlusion1, c.partial_occlusion2};
+    if (stream.bernoulli(p[static_cast<std::size_t>(std::min(occlusionOf(in), 2))]))
+    {
+      makePartial(c, detection.box, stream);
+    }
+  }
+  if (c.box_jitter)
+  {
+    NoiseStream stream(c.seed, f.frame, Stream::kJitter, in.line);
+    jitter(c, detection.box, heightOf(in), isPerson(original), f.width, f.height, stream);
+  }
+  return detection;
+}
+
+/// The extra boxes of a found label (a known one), appended to `out`.
+void appendExtraBoxes(const NoiseFrame& f, const NoiseLabel& in, std::vector<Detection>& out)
+{
+  const DetectionNoiseConfig& c = f.c;
+  const int original = labelIndex(in.detection.label);
+  if (original < 0)
+  {
+    return;
+  }
+  NoiseStream stream(c.seed, f.frame, Stream::kExtra, in.line);
+  const int count = stream.poisson(c.extra_rate);
+  for (int k = 0; k < count; ++k)
+  {
+    BoundingBox box = in.detection.box;
+    makePartial(c, box, stream);
+    const int label = c.confusion ? confuse(c, original, stream) : original;
+    const double score = drawScore(c, c.background.score_mean, c.background.score_sigma, stream);
+    jitter(c, box, heightOf(in), isPerson(original), f.width, f.height, stream);
+    if (clipBox(box, f.width, f.height))
+    {
+      out.push_back(makeDetection(label, score, box));
+    }
+  }
+}
+
+/// The frame's background false positives, appended to `out` (the image size known).
+void appendFalsePositives(const NoiseFrame& f, std::vector<Detection>& out)
+{
+  const FalsePositiveNoise& fp = f.c.background;
+  NoiseStream stream(f.c.seed, f.frame, Stream::kFalsePositive, 0);
+  const int count = stream.poisson(fp.rate);
+  const std::array<double, 5> weights{fp.car, fp.van, fp.truck, fp.pedestrian, fp.cyclist};
+  const double sum = weights[0] + weights[1] + weights[2] + weights[3] + weights[4];
+  const auto w = static_cast<double>(f.width);
+  const auto h = static_cast<double>(f.height);
+  for (int k = 0; k < count; ++k)
+  {
+    const double score = drawScore(f.c, fp.score_mean, fp.score_sigma, stream);
+    double u = stream.uniform() * sum;
+    int label = 0;
+    while (label < 4 && u >= weights[static_cast<std::size_t>(label)])
+    {
+      u -= weights[static_cast<std::size_t>(label)];
+      ++label;
+    }
+    const double box_height = std::min(fp.height_median * std::exp(fp.height_sigma * stream.normal()), h);
+    const double box_width =
+        std::min(box_height * (isVehicle(label) ? fp.vehicle_aspect : fp.person_aspect), w);
+    const double bottom = stream.uniform(fp.bottom_min, fp.bottom_max) * h;
+    const double centre = stream.uniform(box_width / 2.0, w - box_width / 2.0);
+    BoundingBox box{static_cast<float>(centre - box_width / 2.0), static_cast<float>(bottom - box_height),
+                    static_cast<float>(centre + box_width / 2.0), static_cast<float>(bottom)};
+    if (clipBox(box, f.width, f.height))
+    {
+      out.push_back(makeDetection(label, score, box));
+    }
+  }
+}
+
 void require(bool ok, const std::string& key, const std::string& what, double value)
 {
   if (!ok)
@@ -398,113 +541,28 @@ std::vector<Detection> applyDetectionNoise(const DetectionNoiseConfig& c, std::i
                                            const std::vector<NoiseLabel>& labels, std::uint32_t image_width,
                                            std::uint32_t image_height)
 {
+  const NoiseFrame f{c, frame, image_width, image_height};
   std::vector<Detection> out;
   for (const NoiseLabel& in : labels)
   {
-    const int original = labelIndex(in.detection.label);
-    const double height = static_cast<double>(in.detection.box.y_max - in.detection.box.y_min);
-    const int occlusion = std::clamp(in.occluded, 0, 3);
-    const double truncated = std::clamp(static_cast<double>(in.truncated), 0.0, 1.0);
     double score = in.detection.score;
-    if (c.misses)
+    if (!drawPresence(f, in, score))
     {
-      if (original < 0 && !c.keep_other_labels)
-      {
-        continue;
-      }
-      if (original >= 0)
-      {
-        if (occlusion == 3 && !c.fully_occluded_detected)
-        {
-          continue;
-        }
-        const auto label = static_cast<std::size_t>(original);
-        NoiseStream presence(c.seed, frame, Stream::kPresence, in.line);
-        if (!presence.bernoulli(sigmoid(c.presence.predictor(label, height, occlusion, truncated))))
-        {
-          continue;
-        }
-        NoiseStream score_stream(c.seed, frame, Stream::kScore, in.line);
-        score =
-            drawScore(c, c.score.predictor(label, height, occlusion, truncated), c.score_sigma, score_stream);
-      }
+      continue;
     }
-    Detection detection = in.detection;
-    detection.score = static_cast<float>(score);
-    if (c.confusion && original >= 0)
-    {
-      NoiseStream stream(c.seed, frame, Stream::kConfusion, in.line);
-      const int label = confuse(c, original, stream);
-      detection.label = noiseModelLabels()[static_cast<std::size_t>(label)];
-      detection.class_id = noiseClassId(detection.label);
-    }
-    if (c.partial_boxes)
-    {
-      NoiseStream stream(c.seed, frame, Stream::kPartial, in.line);
-      const std::array<double, 3> p{c.partial_occlusion0, c.partial_occlusion1, c.partial_occlusion2};
-      if (stream.bernoulli(p[static_cast<std::size_t>(std::min(occlusion, 2))]))
-      {
-        makePartial(c, detection.box, stream);
-      }
-    }
-    if (c.box_jitter)
-    {
-      NoiseStream stream(c.seed, frame, Stream::kJitter, in.line);
-      jitter(c, detection.box, height, isPerson(original), image_width, image_height, stream);
-    }
+    Detection detection = noisyBox(f, in, score);
     if (clipBox(detection.box, image_width, image_height))
     {
       out.push_back(detection);
     }
-    if (c.extra_boxes && original >= 0)
+    if (c.extra_boxes)
     {
-      NoiseStream stream(c.seed, frame, Stream::kExtra, in.line);
-      const int count = stream.poisson(c.extra_rate);
-      for (int k = 0; k < count; ++k)
-      {
-        BoundingBox box = in.detection.box;
-        makePartial(c, box, stream);
-        const int label = c.confusion ? confuse(c, original, stream) : original;
-        const double extra_score = drawScore(c, c.background.score_mean, c.background.score_sigma, stream);
-        jitter(c, box, height, isPerson(original), image_width, image_height, stream);
-        if (clipBox(box, image_width, image_height))
-        {
-          out.push_back(makeDetection(label, extra_score, box));
-        }
-      }
+      appendExtraBoxes(f, in, out);
     }
   }
   if (c.false_positives && image_width > 0 && image_height > 0)
   {
-    const FalsePositiveNoise& f = c.background;
-    NoiseStream stream(c.seed, frame, Stream::kFalsePositive, 0);
-    const int count = stream.poisson(f.rate);
-    const std::array<double, 5> weights{f.car, f.van, f.truck, f.pedestrian, f.cyclist};
-    const double sum = weights[0] + weights[1] + weights[2] + weights[3] + weights[4];
-    const auto w = static_cast<double>(image_width);
-    const auto h = static_cast<double>(image_height);
-    for (int k = 0; k < count; ++k)
-    {
-      const double fp_score = drawScore(c, f.score_mean, f.score_sigma, stream);
-      double u = stream.uniform() * sum;
-      int label = 0;
-      while (label < 4 && u >= weights[static_cast<std::size_t>(label)])
-      {
-        u -= weights[static_cast<std::size_t>(label)];
-        ++label;
-      }
-      const double box_height = std::min(f.height_median * std::exp(f.height_sigma * stream.normal()), h);
-      const double box_width =
-          std::min(box_height * (isVehicle(label) ? f.vehicle_aspect : f.person_aspect), w);
-      const double bottom = stream.uniform(f.bottom_min, f.bottom_max) * h;
-      const double centre = stream.uniform(box_width / 2.0, w - box_width / 2.0);
-      BoundingBox box{static_cast<float>(centre - box_width / 2.0), static_cast<float>(bottom - box_height),
-                      static_cast<float>(centre + box_width / 2.0), static_cast<float>(bottom)};
-      if (clipBox(box, image_width, image_height))
-      {
-        out.push_back(makeDetection(label, fp_score, box));
-      }
-    }
+    appendFalsePositives(f, out);
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const Detection& a, const Detection& b) { return a.score > b.score; });
