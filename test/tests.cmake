@@ -67,6 +67,8 @@ gvf_rostest(test_yolo_detector_nodelet LAUNCH test/nodelets/yolo_detector_nodele
   SOURCES test/nodelets/test_yolo_detector_nodelet.cpp LINK gvf_tiny_darknet)
 gvf_rostest(test_yolo_replay_nodelet LAUNCH test/nodelets/yolo_replay_nodelet.test
   SOURCES test/nodelets/test_yolo_replay_nodelet.cpp)
+gvf_rostest(test_yolo_replay_noise_nodelet LAUNCH test/nodelets/yolo_replay_noise_nodelet.test
+  SOURCES test/nodelets/test_yolo_replay_noise_nodelet.cpp LINK grid_vision_fusion_ros)
 gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_nodelet.test
   SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
 gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test
@@ -130,10 +132,12 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
 # --- Python tests of the scripts, no network needed: the result summary's skipped cases;
 # scripts/fetch_model.sh on local file:// downloads (resume, checksums, errors);
 # scripts/tfjs_to_onnx.py on small TF.js graphs the test writes (against a numpy reference, at
-# several input sizes). And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
+# several input sizes); scripts/calibrate_detector_noise.py on hand-made frames and detections.
+# And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
 # YoloDetector: test_yolo_onnx_model.cpp in test_detection), SKIPPED (listed, never passed)
 # until scripts/fetch_model.sh has fetched it (doc/detectors.md).
-foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model)
+foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model
+    test_calibrate_detector_noise)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"
     COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/scripts/${script}.py --junit ${GVF_SCRIPT_RESULT}")
