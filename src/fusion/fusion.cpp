@@ -60,7 +60,7 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
 
 FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& box,
                               const std::vector<std::size_t>& members, const ProjectedPointsView& points,
-                              const FusionConfig& config)
+                              const FusionConfig& config, const std::vector<Eigen::Vector2d>& expected)
 {
   FusedObject object;
   object.detection_index = detection_index;
@@ -78,7 +78,7 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
   object.median_y = median(ys);
   object.x = object.median_x;
   object.y = object.median_y;
-  object.cluster = objectCluster(points, object.members, box, config.centre.cluster_distance);
+  object.cluster = objectCluster(points, object.members, box, config.centre.cluster_distance, expected);
   object.grid = gridEvidence(points, object.cluster);
   for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? object.cluster : object.members)
   {
@@ -314,7 +314,7 @@ Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, c
 }
 
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
-                  const FusionConfig& config)
+                  const FusionConfig& config, const std::vector<std::vector<Eigen::Vector2d>>& expected)
 {
   FusionResult result;
   std::vector<FusionRegion> regions;
@@ -359,7 +359,9 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
   {
     if (!members[d].empty())
     {
-      result.objects.push_back(pointwiseFeatures(d, detections[d].box, members[d], points, config));
+      static const std::vector<Eigen::Vector2d> kNone;
+      result.objects.push_back(pointwiseFeatures(d, detections[d].box, members[d], points, config,
+                                                 d < expected.size() ? expected[d] : kNone));
       result.objects.back().id = static_cast<std::uint32_t>(result.objects.size() - 1);
     }
   }

@@ -301,7 +301,8 @@ double fitOrientation(const std::vector<double>& x, const std::vector<double>& y
 
 std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
                                          const std::vector<std::uint32_t>& members, const BoundingBox& box,
-                                         double cluster_distance)
+                                         double cluster_distance,
+                                         const std::vector<Eigen::Vector2d>& expected)
 {
   const std::size_t n = members.size();
   std::vector<double> xs(n), ys(n);
@@ -325,7 +326,9 @@ std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
   const double box_height = std::max(static_cast<double>(box.height()), 1.0);
   const double below_px = kBelowToleranceFraction * box_height;
   const double above_px = kAboveToleranceFraction * box_height;
-  std::map<std::size_t, std::pair<double, float>> score_of;  // label -> (score, lowest row)
+  std::map<std::size_t, std::pair<double, float>> score_of;              // label -> (score, lowest row)
+  std::map<std::size_t, std::pair<std::size_t, std::size_t>> continued;  // label -> (cells, expected ones)
+  const double near2 = cluster_distance * cluster_distance;
   for (std::size_t k = 0; k < n; ++k)
   {
     const float v = points.v[members[k]];
@@ -335,6 +338,17 @@ std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
         score_of.try_emplace(label[k], 0.0, -std::numeric_limits<float>::infinity()).first->second;
     score += std::exp(-below * below - above * above);
     lowest = std::max(lowest, v);
+    auto& [cells, expected_cells] = continued[label[k]];
+    ++cells;
+    const Eigen::Vector2d cell(xs[k], ys[k]);
+    expected_cells +=
+        std::any_of(expected.begin(), expected.end(),
+                    [&](const Eigen::Vector2d& e) { return (e - cell).squaredNorm() <= near2; });
+  }
+  for (auto& [l, entry] : score_of)
+  {
+    const auto& [cells, expected_cells] = continued.at(l);
+    entry.first *= 1.0 + static_cast<double>(expected_cells) / static_cast<double>(cells);
   }
   std::size_t chosen = score_of.begin()->first;
   for (const auto& [l, entry] : score_of)

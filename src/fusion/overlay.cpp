@@ -23,6 +23,12 @@ void requireBgr(const cv::Mat& image)
     throw std::invalid_argument("overlay drawing needs a CV_8UC3 (BGR) image");
   }
 }
+/// The label an object is published with: its track's, else its detection's.
+const std::string& labelOf(const FusedObject& object, const Detection& detection)
+{
+  return object.label.empty() ? detection.label : object.label;
+}
+
 }  // namespace
 
 cv::Scalar motionColor(Motion motion)
@@ -107,12 +113,14 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     std::string text = detection.label + " (no grid points)";
     if (tentative)
     {
-      text = trackLabel(object->id, object->motion, detection.label, object->speed()) + " (new track)";
+      text = trackLabel(object->id, object->motion, labelOf(*object, detection), object->speed()) +
+             " (new track)";
     }
     else if (object)
     {
-      text = result.tracked ? trackLabel(object->id, object->motion, detection.label, object->speed())
-                            : objectLabel(object->motion, detection.label, object->speed());
+      text = result.tracked
+                 ? trackLabel(object->id, object->motion, labelOf(*object, detection), object->speed())
+                 : objectLabel(object->motion, detection.label, object->speed());
     }
     int baseline = 0;
     const double scale = 0.5;

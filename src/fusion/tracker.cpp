@@ -96,11 +96,51 @@ double Tracker::positionDistance2(const Track& track, const TrackObservation& ob
   return innovation.dot(s.ldlt().solve(innovation));
 }
 
+std::vector<std::vector<Eigen::Vector2d>> Tracker::expectedCells(
+    double stamp_s, const std::vector<Detection>& detections) const
+{
+  std::vector<std::vector<Eigen::Vector2d>> expected(detections.size());
+  const bool continuing = has_stamp_ && stamp_s >= last_stamp_ && stamp_s - last_stamp_ <= config_.max_gap;
+  for (std::size_t d = 0; continuing && d < detections.size(); ++d)
+  {
+    const Track* best = nullptr;
+    double best_iou = config_.min_iou;
+    for (const Track& track : tracks_)
+    {
+      const double iou = boxOverlap(detections[d].box, track.box);
+      if (iou >= best_iou && groupOf(detections[d].label) == track.group)
+      {
+        best = &track;
+        best_iou = iou;
+      }
+    }
+    if (best != nullptr)
+    {
+      const Eigen::Vector2d shift = best->motion.state().tail<2>() * (stamp_s - best->last_seen);
+      for (const Eigen::Vector2d& cell : best->cells)
+      {
+        expected[d].push_back(cell + shift);
+      }
+    }
+  }
+  return expected;
+}
+
+const std::string& Tracker::groupOf(const std::string& label) const
+{
+  const auto group = config_.label_groups.find(label);
+  return group == config_.label_groups.end() ? label : group->second;
+}
+
 TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
 {
   TrackEstimate e;
   e.confirmed = track.confirmed;
   e.id = track.id;
+  e.label = std::max_element(track.label_votes.begin(), track.label_votes.end(),
+                             [](const auto& a, const auto& b) { return a.second < b.second; })
+                ->first;
+  e.class_id = track.label_classes.at(e.label);
   e.p_dynamic = track.motion.pDynamic();
   e.motion = e.p_dynamic > 0.5 ? Motion::kDynamic : e.p_dynamic < 0.5 ? Motion::kStatic : Motion::kUnknown;
   const Eigen::Vector4d state = track.motion.state();
@@ -172,7 +212,7 @@ std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>&
     for (std::size_t o = 0; o < observations.size(); ++o)
     {
       const TrackObservation& obs = observations[o];
-      if (obs.label != track.label)
+      if (groupOf(obs.label) != track.group)
       {
         continue;
       }
@@ -210,6 +250,10 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
     track.motion.restartAt(centre);
   }
   track.motion.updateGrid(obs.grid);
+  track.cells = obs.cells;
+  track.last_seen = last_stamp_;
+  track.label_votes[obs.label] += obs.score;
+  track.label_classes[obs.label] = obs.class_id;
   track.box = obs.box;
   ++track.hits;
   track.misses = 0;
@@ -218,15 +262,25 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 
 Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
 {
-  Track track{next_id_++, obs.label, MotionModel(config_.motion), obs.box,
-              1,          0,         config_.min_hits <= 1,       stamp_s};
+  Track track;
+  track.id = next_id_++;
+  track.group = groupOf(obs.label);
+  track.motion = MotionModel(config_.motion);
+  track.box = obs.box;
+  track.label_votes[obs.label] = obs.score;
+  track.label_classes[obs.label] = obs.class_id;
+  track.cells = obs.cells;
+  track.last_seen = stamp_s;
+  track.hits = 1;
+  track.confirmed = config_.min_hits <= 1;
+  track.first_stamp = stamp_s;
   track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
   track.motion.updateGrid(obs.grid);
   return track;
 }
 
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, FusionResult& result)
+                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result)
 {
   std::vector<TrackObservation> observations;
   observations.reserve(result.objects.size());
@@ -236,6 +290,8 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     const Detection& detection = detections.at(object.detection_index);
     TrackObservation o;
     o.label = detection.label;
+    o.score = detection.score;
+    o.class_id = detection.class_id;
     o.box = detection.box;
     o.x = object.x;
     o.y = object.y;
@@ -243,6 +299,11 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     o.length_yaw = object.length_yaw;
     o.hidden_length = object.hidden_length;
     o.grid = object.grid;
+    o.cells.reserve(object.cluster.size());
+    for (std::uint32_t i : object.cluster)
+    {
+      o.cells.emplace_back(points.x[i], points.y[i]);
+    }
     observations.push_back(std::move(o));
   }
   const std::vector<TrackEstimate> estimates = tracker.update(stamp_s, observations);
@@ -251,6 +312,8 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     FusedObject& object = result.objects[i];
     const TrackEstimate& track = estimates[i];
     object.id = track.id;
+    object.label = track.label;
+    object.class_id = track.class_id;
     object.track_state = track.confirmed ? TrackState::kConfirmed : TrackState::kTentative;
     object.p_dynamic = track.p_dynamic;
     object.motion = track.motion;

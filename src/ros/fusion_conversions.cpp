@@ -110,8 +110,8 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
     const Detection& detection = detections.at(object.detection_index);
     DetectedObject out;
     out.id = object.id;
-    out.class_id = detection.class_id;
-    out.label = detection.label;
+    out.class_id = object.label.empty() ? detection.class_id : object.class_id;
+    out.label = object.label.empty() ? detection.label : object.label;
     out.score = detection.score;
     out.motion = static_cast<std::uint8_t>(object.motion);
     out.p_dynamic = static_cast<float>(object.p_dynamic);

@@ -38,7 +38,10 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     throw std::invalid_argument(input_error);
   }
   const ProjectedPointsView points = viewOf(grid);
-  pair.result = grid_vision_fusion::fuse(pair.detections, points, params_.fusion);
+  const double stamp = detections.header.stamp.toSec();
+  pair.result = grid_vision_fusion::fuse(pair.detections, points, params_.fusion,
+                                         params_.tracking ? tracker_.expectedCells(stamp, pair.detections)
+                                                          : std::vector<std::vector<Eigen::Vector2d>>{});
   if (params_.fusion.position == PositionSource::kCentre)
   {
     estimateCentres(pair.result, pair.detections, points, grid.camera_position.x, grid.camera_position.y,
@@ -46,7 +49,6 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   }
   if (params_.tracking)
   {
-    const double stamp = detections.header.stamp.toSec();
     const double gap = stamp - last_stamp_;
     if (has_stamp_ && gap < 0.0)
     {
@@ -59,8 +61,7 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     }
     has_stamp_ = true;
     last_stamp_ = stamp;
-    trackObjects(tracker_, detections.header.stamp.toSec(), pair.detections, detections.image_width,
-                 pair.result);
+    trackObjects(tracker_, stamp, pair.detections, detections.image_width, points, pair.result);
   }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
   return pair;

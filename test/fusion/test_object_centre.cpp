@@ -147,6 +147,23 @@ TEST(ObjectCentre, CellsHighAboveTheBottomEdgeBelongToWhatStandsBehind)
   EXPECT_TRUE(objectCluster(close.view(), {}, kBox, 0.5).empty());
 }
 
+TEST(ObjectCentre, TheCellsTheTrackExpectsContinue)
+{
+  // A wall 3 m behind a pedestrian, its 5 cells at row 291 (within the 10 % tolerance above the
+  // bottom edge), outscores the pedestrian's 3 cells by the image alone (a box edge a few pixels
+  // off tips it so). The pedestrian's track expects its 3 cells: its score doubles, 6 against 5.
+  ProjectedPoints points;
+  addFace(points, 13.0, -0.4, 13.0, 0.4, 291.F);  // the wall: 5 cells
+  addFace(points, 10.0, -0.2, 10.0, 0.2, 300.F);  // the pedestrian: 3 cells
+  EXPECT_EQ(objectCluster(points.view(), all(points), kBox, 0.5).size(), 5U) << "the image alone: the wall";
+  const std::vector<Eigen::Vector2d> expected = {{10.1, -0.2}, {10.1, 0.0}, {10.1, 0.2}};
+  EXPECT_EQ(objectCluster(points.view(), all(points), kBox, 0.5, expected),
+            (std::vector<std::uint32_t>{5, 6, 7}))
+      << "the track's cells continue: the pedestrian";
+  // Expected cells far from every cluster change nothing.
+  EXPECT_EQ(objectCluster(points.view(), all(points), kBox, 0.5, {{20.0, 5.0}}).size(), 5U);
+}
+
 TEST(ObjectCentre, WithoutAFootprintTheCentreOfTheCells)
 {
   ProjectedPoints points;

@@ -285,12 +285,12 @@ TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
   for (int k = 0; k < 10; ++k)
   {
     FusionResult r = result;
-    trackObjects(tracker, k * kFramePeriodS, detections, 1242, r);
+    trackObjects(tracker, k * kFramePeriodS, detections, 1242, ProjectedPointsView{}, r);
   }
   FusionResult cut = result;
   cut.objects[0].x = 11.5;  // the visible part's centre
   detections[0].box.x_min = 0.F;
-  trackObjects(tracker, 1.0, detections, 1242, cut);
+  trackObjects(tracker, 1.0, detections, 1242, ProjectedPointsView{}, cut);
   ASSERT_EQ(cut.objects.size(), 1U);
   EXPECT_LT(cut.objects[0].x, 10.5);
   EXPECT_EQ(cut.objects[0].track_state, TrackState::kConfirmed);
@@ -299,13 +299,65 @@ TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
   EXPECT_TRUE(cut.tracked);
 }
 
-TEST(Tracker, OnlyTheSameLabelIsAssociated)
+TEST(Tracker, OnlyLabelsOfOneGroupAreAssociated)
 {
   Tracker tracker;
   tracker.update(0.0, {observe("car", 10.0, 0.0, 300.F)});
   const auto e = tracker.update(0.1, {observe("pedestrian", 10.0, 0.0, 300.F)});
   EXPECT_EQ(e[0].id, 2U);
   EXPECT_FALSE(e[0].confirmed);
+}
+
+TEST(Tracker, AVanCalledCarNowAndThenStaysAVanOnItsTrack)
+{
+  // A detector sees a van as "van" (class 2) at 0.8, and in every third image as "car" (class 0)
+  // at 0.6: one track, reported as a van throughout; an object of another group (a pedestrian)
+  // at the same place starts its own track.
+  Tracker tracker;
+  for (int k = 0; k < 12; ++k)
+  {
+    TrackObservation o = observe(k % 3 == 2 ? "car" : "van", 15.0, 2.0, 400.F);
+    o.score = k % 3 == 2 ? 0.6 : 0.8;
+    o.class_id = k % 3 == 2 ? 0 : 2;
+    const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];
+    EXPECT_EQ(e.id, 1U) << "image " << k;
+    EXPECT_EQ(e.label, "van") << "image " << k;
+    EXPECT_EQ(e.class_id, 2U) << "image " << k;
+  }
+  TrackerConfig apart;
+  apart.label_groups.clear();  // every label a group of its own
+  Tracker strict(apart);
+  strict.update(0.0, {observe("van", 15.0, 2.0, 400.F)});
+  EXPECT_EQ(strict.update(0.1, {observe("car", 15.0, 2.0, 400.F)})[0].id, 2U);
+}
+
+TEST(Tracker, ATrackExpectsItsCellsMovedOnByItsVelocity)
+{
+  // A car at 10 m/s along x, its cluster's cells given: in the next image its detection (the box
+  // moved 10 px) expects those cells 1 m further; a pedestrian's box there expects nothing (another
+  // group), nor a box that does not overlap, nor any box after a gap over max_gap.
+  Tracker tracker;
+  for (int k = 0; k < 10; ++k)
+  {
+    TrackObservation o = moving("car", 10.0 + k, 0.0, 300.F + 10.F * k, 10.0, 0.0);
+    o.cells = {{8.0 + k, -0.8}, {8.0 + k, 0.8}};
+    tracker.update(k * kFramePeriodS, {o});
+  }
+  std::vector<Detection> detections(3);
+  detections[0].label = "car";
+  detections[0].box = BoundingBox{380.F, 100.F, 420.F, 180.F};
+  detections[1].label = "pedestrian";
+  detections[1].box = detections[0].box;
+  detections[2].label = "car";
+  detections[2].box = BoundingBox{900.F, 100.F, 940.F, 180.F};
+  const auto expected = tracker.expectedCells(1.0, detections);
+  ASSERT_EQ(expected.size(), 3U);
+  ASSERT_EQ(expected[0].size(), 2U);
+  EXPECT_NEAR(expected[0][0].x(), 18.0, 0.1);
+  EXPECT_NEAR(expected[0][1].y(), 0.8, 0.05);
+  EXPECT_TRUE(expected[1].empty());
+  EXPECT_TRUE(expected[2].empty());
+  EXPECT_TRUE(tracker.expectedCells(3.0, detections)[0].empty()) << "a gap over max_gap";
 }
 
 TEST(Tracker, OverlappingBoxesPassTheGateWhenThePositionJumps)

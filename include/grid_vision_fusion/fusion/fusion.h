@@ -142,6 +142,10 @@ struct FusedObject
   double p_dynamic = 0.5;
   /// Tracked only: whether the object's track is tentative or confirmed.
   TrackState track_state = TrackState::kNone;
+  /// Tracked only: the track's label (the one its objects had most often) and its detector class
+  /// index; empty: the detection's.
+  std::string label;
+  std::uint32_t class_id = 0;
   std::vector<std::uint32_t> members;  ///< indices of the region's valid points
   /// The object's own cells among the members: objectCluster() at centre.cluster_distance.
   std::vector<std::uint32_t> cluster;
@@ -181,8 +185,10 @@ Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, c
 /// config.motion_vote names). Regions without any point are discarded; ids
 /// are 0, 1, 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
 /// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
+/// `expected` (empty, or one list per detection): the cells the detection's track expects
+/// (Tracker::expectedCells()), which objectCluster() prefers.
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
-                  const FusionConfig& config);
+                  const FusionConfig& config, const std::vector<std::vector<Eigen::Vector2d>>& expected = {});
 
 /// Sets the position (x, y) of every object of `result` to its centre: estimateCentre() over its
 /// members (centreOfCluster() of its cluster when fuse() has found one), with the footprint of its

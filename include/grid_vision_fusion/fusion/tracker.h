@@ -19,6 +19,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,14 @@ struct TrackerConfig
   double iou_weight = 1.0;      ///< weight of (1 − IoU) in the association cost, >= 0
   double position_sigma = 0.5;  ///< noise of a position in the association gate [m], > 0
   double max_gap = 1.0;         ///< more time between two images [s], or time going back, resets the tracks
+  /// Labels a detector confuses with each other, label → group name: a track takes objects of
+  /// any label of its group, and reports the label its objects had most often (score-weighted).
+  /// A label not in the map is a group of its own.
+  std::map<std::string, std::string> label_groups = {{"car", "vehicle"},
+                                                     {"van", "vehicle"},
+                                                     {"truck", "vehicle"},
+                                                     {"pedestrian", "person"},
+                                                     {"cyclist", "person"}};
   /// The motion model of every track: the whole motion verdict.
   MotionModelConfig motion;
 
@@ -51,9 +60,11 @@ struct TrackerConfig
 /// One fused object of an image, as the tracker sees it.
 struct TrackObservation
 {
-  std::string label;  ///< the detector's class; only tracks of the same label are associated
-  BoundingBox box;    ///< the detector box [px]
-  double x = 0.0;     ///< observed centre [m], fixed frame
+  std::string label;           ///< the detector's class; only tracks of its label group are associated
+  double score = 1.0;          ///< the detector's confidence, the weight of the label's vote
+  std::uint32_t class_id = 0;  ///< the detector's class index of the label
+  BoundingBox box;             ///< the detector box [px]
+  double x = 0.0;              ///< observed centre [m], fixed frame
   double y = 0.0;
   /// The box is cut by the image's left or right edge: its centre follows the visible part,
   /// which slides along the object's length (direction length_yaw [rad]) as the object leaves
@@ -61,6 +72,9 @@ struct TrackObservation
   bool truncated = false;
   double length_yaw = 0.0;
   double hidden_length = 0.0;
+  /// The cells of the object's cluster [m], fixed frame: what the track expects to continue in
+  /// the next image (expectedCells()).
+  std::vector<Eigen::Vector2d> cells;
   GridMotionEvidence grid;  ///< what the grid says about the object's motion
 };
 
@@ -69,6 +83,8 @@ struct TrackEstimate
 {
   bool confirmed = false;            ///< the track has min_hits hits (else tentative)
   std::uint32_t id = 0;              ///< track id, unique over the tracker's life, from 1
+  std::string label;                 ///< the label its objects had most often (score-weighted)...
+  std::uint32_t class_id = 0;        ///< ...and that label's detector class index
   Motion motion = Motion::kUnknown;  ///< the verdict: dynamic when p_dynamic > 0.5, static below
   double p_dynamic = 0.5;            ///< P(dynamic), [0, 1]
   double x = 0.0;                    ///< filtered position [m]
@@ -92,6 +108,13 @@ public:
   /// more than max_gap, first drops every track (ids keep counting up).
   std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations);
 
+  /// For each detection of an image at `stamp_s` [s], the cells its object's track expects: the
+  /// cells of the track (of the detection's label group) whose last box overlaps the detection's
+  /// box most (by min_iou or more), moved on by the track's velocity to `stamp_s`; empty when no
+  /// track qualifies. For fuse() (objectCluster()); the tracks are not changed.
+  std::vector<std::vector<Eigen::Vector2d>> expectedCells(double stamp_s,
+                                                          const std::vector<Detection>& detections) const;
+
   /// Replaces the configuration; the tracks are kept. @throws std::invalid_argument as the
   /// constructor, leaving the configuration unchanged.
   void setConfig(const TrackerConfig& config);
@@ -106,9 +129,13 @@ private:
   struct Track
   {
     std::uint32_t id = 0;
-    std::string label;
+    std::string group;                                   ///< label group of its objects
+    std::map<std::string, double> label_votes;           ///< label → sum of its objects' scores
+    std::map<std::string, std::uint32_t> label_classes;  ///< label → detector class index
     MotionModel motion;
     BoundingBox box;
+    std::vector<Eigen::Vector2d> cells;  ///< of its object's cluster in its last image
+    double last_seen = 0.0;              ///< stamp of its last image with an object [s]
     int hits = 0;
     int misses = 0;
     bool confirmed = false;
@@ -123,6 +150,8 @@ private:
   /// A tentative track for an observation left over.
   Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
+  /// The label group of `label` (label_groups, or the label itself).
+  const std::string& groupOf(const std::string& label) const;
   /// Squared Mahalanobis distance of the observation from the track's predicted position, with
   /// the association noise position_sigma.
   double positionDistance2(const Track& track, const TrackObservation& observation) const;
@@ -136,12 +165,13 @@ private:
 
 /// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
 /// observation (label and box of its detection, its centre, whether the box touches the left or
-/// right edge of an image `image_width` pixels wide, the grid's evidence of its cells); every
+/// right edge of an image `image_width` pixels wide, the grid's evidence of its cells, its
+/// cluster's cells in `points`); every
 /// object takes its track's id, state (tentative or confirmed), P(dynamic), verdict, filtered
 /// position and, when dynamic, velocity and heading (static and unknown ones zero, as the
 /// message says). Sets result.tracked.
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, FusionResult& result);
+                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result);
 
 /// Intersection over union of two boxes (continuous pixel coordinates), 0 when disjoint or empty.
 double boxOverlap(const BoundingBox& a, const BoundingBox& b);
