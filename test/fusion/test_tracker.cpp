@@ -313,7 +313,9 @@ TEST(Tracker, AVanCalledCarNowAndThenStaysAVanOnItsTrack)
   // A detector sees a van as "van" (class 2) at 0.8, and in every third image as "car" (class 0)
   // at 0.6: one track, reported as a van throughout; an object of another group (a pedestrian)
   // at the same place starts its own track.
-  Tracker tracker;
+  TrackerConfig grouped;
+  grouped.label_groups = {{"car", "vehicle"}, {"van", "vehicle"}, {"truck", "vehicle"}};
+  Tracker tracker(grouped);
   for (int k = 0; k < 12; ++k)
   {
     TrackObservation o = observe(k % 3 == 2 ? "car" : "van", 15.0, 2.0, 400.F);
@@ -324,9 +326,7 @@ TEST(Tracker, AVanCalledCarNowAndThenStaysAVanOnItsTrack)
     EXPECT_EQ(e.label, "van") << "image " << k;
     EXPECT_EQ(e.class_id, 2U) << "image " << k;
   }
-  TrackerConfig apart;
-  apart.label_groups.clear();  // every label a group of its own
-  Tracker strict(apart);
+  Tracker strict;  // the default: every label a group of its own
   strict.update(0.0, {observe("van", 15.0, 2.0, 400.F)});
   EXPECT_EQ(strict.update(0.1, {observe("car", 15.0, 2.0, 400.F)})[0].id, 2U);
 }
