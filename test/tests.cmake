@@ -104,6 +104,8 @@ endforeach()
 roslaunch_add_file_check(launch/perception.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch model_weights:=yolov3.weights bag:=drive.bag record:=out.bag)
+roslaunch_add_file_check(launch/kitti_replay.launch model:=yolov5s-640x192.onnx input_width:=640 input_height:=192 bag:=drive.bag)
+roslaunch_add_file_check(launch/perception.launch model:=yolov3-tiny.cfg weights:=yolov3-tiny.weights input_width:=416 input_height:=416)
 roslaunch_add_file_check(test/nodelets USE_TEST_DEPENDENCIES)
 
 # --- repository rules: formatting, cited paths, what the plugin library links -----------------
