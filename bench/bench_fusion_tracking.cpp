@@ -127,7 +127,7 @@ void BM_FusionPerImage(benchmark::State& state)
     if (mode != 0)
     {
       estimateCentres(result, detections[k], view, 0.0, 0.0, config.centre);
-      trackObjects(tracker, k * kFramePeriodS, detections[k], result);
+      trackObjects(tracker, k * kFramePeriodS, detections[k], 1242, result);
     }
     published += result.objects.size();
     benchmark::DoNotOptimize(result.objects.data());

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# libFuzzer campaign over the parsers of outside input (fuzz/fuzz_*.cpp).
+# libFuzzer campaign over the parsers of outside input (fuzz/<folder>/fuzz_*.cpp).
 #
 #   scripts/fuzz.sh [seconds] [harness...]
 #   scripts/fuzz.sh --ci [seconds]
@@ -29,7 +29,7 @@ shift || true
 WORK=${GVF_FUZZ_DIR:-$HOME/.cache/grid_vision_fusion/fuzz}
 BUILD=$WORK/build
 JOBS=${GVF_JOBS:-$(nproc)}
-ALL_HARNESSES=$(cd "$REPO/fuzz" && ls fuzz_*.cpp | sed 's/^fuzz_//; s/\.cpp$//')
+ALL_HARNESSES=$(cd "$REPO/fuzz" && printf '%s\n' */fuzz_*.cpp | sed 's#^.*/fuzz_##; s/\.cpp$//' | sort)
 HARNESSES=${*:-$ALL_HARNESSES}
 # Debian's ROS tools need Debian's python3 (a pyenv python3 may come first on PATH).
 export PATH=/usr/bin:/bin:$PATH
@@ -43,7 +43,7 @@ if ((CI)) && [ $# -gt 0 ]; then
   usage
 fi
 for harness in $HARNESSES; do
-  [ -e "$REPO/fuzz/fuzz_$harness.cpp" ] || { echo "no harness fuzz/fuzz_$harness.cpp" >&2; usage; }
+  compgen -G "$REPO/fuzz/*/fuzz_$harness.cpp" > /dev/null || { echo "no harness fuzz/*/fuzz_$harness.cpp" >&2; usage; }
 done
 fail() {  # fail <message>: a step before the runs failed
   echo "[fuzz] $1" >&2

@@ -36,7 +36,7 @@ CSV_COLUMNS = ("frame", "label", "truth_motion", "predicted_motion", "truth_band
                "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad", "truth_id",
                "track_id")
 THRESHOLD_KEYS = {"min_moving_dynamic", "min_moving_dynamic_per_class", "min_static_static",
-                  "min_class_matches"}
+                  "min_class_matches", "max_dynamic_latency_p90_s"}
 
 
 class InputError(Exception):
@@ -131,7 +131,42 @@ def read_tracking(folder):
         return None
     if not isinstance(tracking, dict) or any(not isinstance(tracking.get(k), int) for k in TRACKING_COUNTS):
         raise InputError("%s: \"tracking\" lacks one of the counts %s" % (path, ", ".join(TRACKING_COUNTS)))
-    return {k: tracking[k] for k in TRACKING_COUNTS}
+    out = {k: tracking[k] for k in TRACKING_COUNTS}
+    latencies = tracking.get("dynamic_latency_tracks", [])
+    if not isinstance(latencies, list) or any(
+            not isinstance(l, dict) or not isinstance(l.get("label"), str) or
+            not (l.get("latency_s") is None or isinstance(l.get("latency_s"), (int, float))) for l in latencies):
+        raise InputError("%s: \"dynamic_latency_tracks\" is not a list of {label, latency_s}" % path)
+    out["latency"] = [(l["label"], l["latency_s"]) for l in latencies]
+    return out
+
+
+def latency_stats(latencies, label=None):
+    """Count, median, 90th percentile (nearest rank) and worst of the times to the first dynamic
+    verdict of `latencies` [(label, seconds or None)] of `label` (None: all), and how many were never
+    reported dynamic (None, counted as infinite)."""
+    values = sorted(float("inf") if s is None else s for l, s in latencies if label is None or l == label)
+    if not values:
+        return {"count": 0, "median_s": None, "p90_s": None, "worst_s": None, "never": 0}
+
+    def rank(q):
+        value = values[min(len(values) - 1, int(math.ceil(q * len(values))) - 1)]
+        return None if math.isinf(value) else value
+    return {"count": len(values), "median_s": rank(0.5), "p90_s": rank(0.9),
+            "worst_s": None if math.isinf(values[-1]) else values[-1],
+            "never": sum(1 for v in values if math.isinf(v))}
+
+
+def latency_table(latencies):
+    def s(value):
+        return "never" if value is None else "%.1f" % value
+    lines = ["| class | moving objects | median [s] | 90th percentile [s] | worst [s] | never dynamic |",
+             "|---|---|---|---|---|---|"]
+    for label in [None] + sorted({l for l, _ in latencies}):
+        st = latency_stats(latencies, label)
+        lines.append("| %s | %d | %s | %s | %s | %d |" % (label or "all", st["count"], s(st["median_s"]),
+                                                          s(st["p90_s"]), s(st["worst_s"]), st["never"]))
+    return lines
 
 
 def tracking_summary(parts):
@@ -140,6 +175,9 @@ def tracking_summary(parts):
     if not parts:
         return None
     t = {k: sum(p[k] for p in parts) for k in TRACKING_COUNTS}
+    t["latency"] = [l for p in parts for l in p.get("latency", [])]
+    t["dynamic_latency"] = {label or "all": latency_stats(t["latency"], label)
+                            for label in [None] + sorted({l for l, _ in t["latency"]})}
     t["mota"] = (1.0 - (t["misses"] + t["false_positives"] + t["id_switches"]) / t["ground_truth"]
                  if t["ground_truth"] else None)
     t["idf1"] = (2.0 * t["idtp"] / (2 * t["idtp"] + t["idfp"] + t["idfn"]) if t["idtp"] else 0.0)
@@ -273,9 +311,15 @@ def headline_table(h, thresholds):
     return lines
 
 
-def check(h, thresholds):
+def check(h, thresholds, tracking=None):
     """The threshold checks: list of (name, passed, message)."""
     checks = []
+    limit = thresholds.get("max_dynamic_latency_p90_s")
+    if limit is not None:
+        st = latency_stats(tracking["latency"] if tracking else [])
+        ok = st["count"] > 0 and st["p90_s"] is not None and st["p90_s"] <= limit + 1e-9
+        checks.append(("dynamic_latency_p90", ok, "dynamic_latency_p90: %s s over %d moving objects %s %.2f s" % (
+            "never" if st["p90_s"] is None else "%.2f" % st["p90_s"], st["count"], "<=" if ok else ">", limit)))
 
     def add(name, f, minimum):
         if f["total"] == 0:
@@ -386,7 +430,7 @@ def main(argv):
     overall_headline = headline(overall)
     overall_tracking = tracking_summary([t for _, _, _, t in scenarios])
     overall_all = all_classes(overall)
-    checks = check(overall_headline, thresholds)
+    checks = check(overall_headline, thresholds, overall_tracking)
 
     report = {"matching": "ground truth matched by class and IoU >= 0.5, objects up to 30 m ahead "
                           "(evaluate's defaults); truth dynamic above 0.5 m/s",
@@ -418,6 +462,10 @@ def main(argv):
         md += tracking_table([("all scenarios", overall_tracking, motion_right(overall))] +
                              [(name, tracking_summary([t]), motion_right(summarise(rows)))
                               for name, _, rows, t in scenarios])
+        md += ["", "## Time to the first dynamic verdict", "",
+               "Per moving object (truth at 1 m/s or more in a matched frame): the time from that first "
+               "match to its first match reported dynamic; never dynamic counts as infinite.", ""]
+        md += latency_table(overall_tracking["latency"])
     md += ["", "## Per scenario", "",
            "| scenario | matches | moving >= 1 m/s found dynamic [%] | static found static [%] | "
            "moving 0.5-1 m/s found dynamic [%] | wall time [s] |", "|---|---|---|---|---|---|"]

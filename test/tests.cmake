@@ -45,7 +45,7 @@ gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_
 # --- ROS layer and offline (no master) ---------------------------------------------------------
 gvf_gtest(test_ros
   SOURCES test/ros/test_fusion_conversions.cpp test/ros/test_param_source.cpp test/ros/test_node_params.cpp
-    test/ros/test_stages.cpp test/ros/test_tf_wait_queue.cpp test/ros/test_grid_for_image.cpp
+    test/ros_stages/test_stages.cpp test/ros_sync/test_tf_wait_queue.cpp test/ros_sync/test_grid_for_image.cpp
   LINK grid_vision_fusion_ros grid_vision_fusion_offline)
 gvf_gtest(test_offline
   SOURCES test/offline/test_detection_bag.cpp test/offline/test_kitti_bag_writer.cpp
@@ -67,6 +67,8 @@ gvf_rostest(test_yolo_detector_nodelet LAUNCH test/nodelets/yolo_detector_nodele
   SOURCES test/nodelets/test_yolo_detector_nodelet.cpp LINK gvf_tiny_darknet)
 gvf_rostest(test_yolo_replay_nodelet LAUNCH test/nodelets/yolo_replay_nodelet.test
   SOURCES test/nodelets/test_yolo_replay_nodelet.cpp)
+gvf_rostest(test_yolo_replay_noise_nodelet LAUNCH test/nodelets/yolo_replay_noise_nodelet.test
+  SOURCES test/nodelets/test_yolo_replay_noise_nodelet.cpp LINK grid_vision_fusion_ros)
 gvf_rostest(test_grid_projection_nodelet LAUNCH test/nodelets/grid_projection_nodelet.test
   SOURCES test/nodelets/test_grid_projection_nodelet.cpp)
 gvf_rostest(test_fusion_nodelet LAUNCH test/nodelets/fusion_nodelet.test
@@ -132,18 +134,21 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
 # --- Python tests of the scripts, no network needed: the result summary's skipped cases;
 # scripts/fetch_model.sh on local file:// downloads (resume, checksums, errors);
 # scripts/tfjs_to_onnx.py on small TF.js graphs the test writes (against a numpy reference, at
-# several input sizes). And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
+# several input sizes); scripts/calibrate_detector_noise.py on hand-made frames and detections.
+# And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
 # YoloDetector: test_yolo_onnx_model.cpp in test_detection), SKIPPED (listed, never passed)
 # until scripts/fetch_model.sh has fetched it (doc/detectors.md).
-foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model)
+foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model
+    test_calibrate_detector_noise)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"
     COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/scripts/${script}.py --junit ${GVF_SCRIPT_RESULT}")
 endforeach()
 
 # --- fuzzing (scripts/fuzz.sh): the harnesses of fuzz/ over their inputs in test/data/fuzz ------
-file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/fuzz_*.cpp)
+file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/*/fuzz_*.cpp)
 gvf_gtest(test_fuzz_corpus
   SOURCES test/fuzz/test_fuzz_corpus.cpp ${GVF_FUZZ_HARNESS_SOURCES}
   LINK grid_vision_fusion_ros grid_vision_fusion_simulation
   DEFINITIONS GVF_FUZZ_CORPUS_TEST)
+target_include_directories(test_fuzz_corpus PRIVATE ${PROJECT_SOURCE_DIR}/fuzz)  # fuzz_input.h

@@ -119,6 +119,7 @@ void DetectionReplayConfig::validate() const
                                   "\" -> \"" + entry.second + "\"");
     }
   }
+  noise.validate();
 }
 
 DetectionReplay::DetectionReplay(const DetectionReplayConfig& config) : config_(config)
@@ -165,8 +166,10 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
   const std::vector<KittiObjectLabel> labels = readKittiLabels(path);
   const auto& types = kittiObjectTypes();
   std::vector<Detection> detections;
-  for (const KittiObjectLabel& label : labels)
+  std::vector<NoiseLabel> noisy;
+  for (std::size_t line = 0; line < labels.size(); ++line)
   {
+    const KittiObjectLabel& label = labels[line];
     std::string name;
     if (config_.class_map.empty())
     {
@@ -188,7 +191,7 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
       name = it->second;
     }
     const double score = label.score ? static_cast<double>(*label.score) : config_.default_score;
-    if (score < config_.score_threshold)
+    if (score < config_.score_threshold && !config_.noise.enabled)
     {
       continue;
     }
@@ -209,7 +212,25 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
     }
     if (detection.box.x_max > detection.box.x_min && detection.box.y_max > detection.box.y_min)
     {
-      detections.push_back(std::move(detection));
+      if (config_.noise.enabled)
+      {
+        noisy.push_back({std::move(detection), label.truncated, label.occluded, line});
+      }
+      else
+      {
+        detections.push_back(std::move(detection));
+      }
+    }
+  }
+  if (config_.noise.enabled)
+  {
+    for (Detection& detection :
+         applyDetectionNoise(config_.noise, frame_index, noisy, image_width, image_height))
+    {
+      if (detection.score >= config_.score_threshold)
+      {
+        detections.push_back(std::move(detection));
+      }
     }
   }
   return detections;
@@ -218,7 +239,8 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
 std::string DetectionReplay::description() const
 {
   return "replay of " + config_.directory + "/" + config_.file_pattern + ", frame index from the " +
-         toString(config_.index_source);
+         toString(config_.index_source) +
+         (config_.noise.enabled ? ", detector noise seed " + std::to_string(config_.noise.seed) : "");
 }
 
 void DetectionReplay::setScoreThreshold(double score_threshold)

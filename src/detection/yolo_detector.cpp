@@ -186,6 +186,249 @@ std::size_t parameterProduct(std::size_t a, std::size_t b, const std::string& wh
   return a * b;
 }
 
+/// A layer section of a cfg: where it is (for the messages) and the layers before it.
+struct LayerContext
+{
+  const CfgSection& section;
+  const std::string& cfg_path;
+  const std::vector<LayerShape>& shapes;  ///< output shapes of the layers before it
+  std::string where;                      ///< "<cfg>:<line>: [<name>] "
+
+  LayerContext(const CfgSection& s, const std::string& path, const std::vector<LayerShape>& before)
+      : section(s),
+        cfg_path(path),
+        shapes(before),
+        where(path + ":" + std::to_string(s.line) + ": [" + s.name + "] ")
+  {
+  }
+
+  int integer(const std::string& key, int fallback) const { return cfgInt(section, key, fallback, cfg_path); }
+
+  /// The layer `reference` names (an index, or relative to this layer when negative).
+  /// @throws YoloModelError when there is no such layer before this one.
+  const LayerShape& layerAt(int reference) const
+  {
+    const int index = static_cast<int>(shapes.size());
+    const int absolute = reference < 0 ? index + reference : reference;
+    if (absolute < 0 || absolute >= index)
+    {
+      throw YoloModelError(where + "refers to layer " + std::to_string(reference) + ", which does not exist");
+    }
+    return shapes[static_cast<std::size_t>(absolute)];
+  }
+};
+
+/// The input of the network, from its [net] section. @throws YoloModelError when not positive or too large.
+LayerShape netInput(const CfgSection& net, const std::string& cfg_path, DarknetCfgInfo& info)
+{
+  info.input_width = cfgInt(net, "width", 0, cfg_path);
+  info.input_height = cfgInt(net, "height", 0, cfg_path);
+  info.input_channels = cfgInt(net, "channels", 3, cfg_path);
+  if (info.input_width <= 0 || info.input_height <= 0 || info.input_channels <= 0)
+  {
+    throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
+                         ": [net] needs positive width, height and channels");
+  }
+  if (info.input_width > kMaxLayerDimension || info.input_height > kMaxLayerDimension ||
+      info.input_channels > kMaxLayerDimension)
+  {
+    throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
+                         ": [net] width, height and channels must be at most " +
+                         std::to_string(kMaxLayerDimension));
+  }
+  return {info.input_channels, info.input_height, info.input_width};
+}
+
+/// [convolutional]: its output shape; its weights block and parameters added to `info`.
+LayerShape convolutionalLayer(const LayerContext& layer, const LayerShape& previous, DarknetCfgInfo& info)
+{
+  const std::string& where = layer.where;
+  const int filters = layer.integer("filters", 1);
+  const int size = layer.integer("size", 1);
+  const int stride = layer.integer("stride", 1);
+  const int groups = layer.integer("groups", 1);
+  const bool batch_normalize = layer.integer("batch_normalize", 0) != 0;
+  int padding = layer.integer("padding", 0);
+  if (layer.integer("pad", 0) != 0)
+  {
+    padding = size / 2;
+  }
+  if (filters <= 0 || size <= 0 || stride <= 0 || groups <= 0 || previous.channels % groups != 0)
+  {
+    throw YoloModelError(where + "needs positive filters, size, stride and groups dividing the " +
+                         std::to_string(previous.channels) + " input channels");
+  }
+  const std::size_t weights = parameterProduct(
+      parameterProduct(static_cast<std::size_t>(filters),
+                       static_cast<std::size_t>(previous.channels / groups), where),
+      parameterProduct(static_cast<std::size_t>(size), static_cast<std::size_t>(size), where), where);
+  info.blocks.push_back({filters, weights, batch_normalize});
+  info.parameters += static_cast<std::size_t>(filters) * (batch_normalize ? 4 : 1) + weights;
+  return {filters, (previous.height + 2 * std::int64_t{padding} - size) / stride + 1,
+          (previous.width + 2 * std::int64_t{padding} - size) / stride + 1};
+}
+
+/// [connected]: its output shape; its weights block and parameters added to `info`.
+LayerShape connectedLayer(const LayerContext& layer, const LayerShape& previous, DarknetCfgInfo& info)
+{
+  const std::string& where = layer.where;
+  const int outputs = layer.integer("output", 1);
+  const bool batch_normalize = layer.integer("batch_normalize", 0) != 0;
+  const std::size_t inputs =
+      parameterProduct(parameterProduct(static_cast<std::size_t>(previous.channels),
+                                        static_cast<std::size_t>(previous.height), where),
+                       static_cast<std::size_t>(previous.width), where);
+  if (outputs <= 0)
+  {
+    throw YoloModelError(where + "output must be positive");
+  }
+  const std::size_t weights = parameterProduct(static_cast<std::size_t>(outputs), inputs, where);
+  info.blocks.push_back({outputs, weights, batch_normalize});
+  info.parameters += weights + static_cast<std::size_t>(outputs) * (batch_normalize ? 4 : 1);
+  return {outputs, 1, 1};
+}
+
+/// [maxpool]: its output shape.
+LayerShape maxpoolLayer(const LayerContext& layer, const LayerShape& previous)
+{
+  const int stride = layer.integer("stride", 1);
+  const int size = layer.integer("size", stride);
+  const int padding = layer.integer("padding", size - 1);
+  if (stride <= 0 || size <= 0)
+  {
+    throw YoloModelError(layer.where + "needs positive size and stride");
+  }
+  return {previous.channels, (previous.height + std::int64_t{padding} - size) / stride + 1,
+          (previous.width + std::int64_t{padding} - size) / stride + 1};
+}
+
+/// [upsample] (a negative stride divides): its output shape.
+LayerShape upsampleLayer(const LayerContext& layer, const LayerShape& previous)
+{
+  const int stride = layer.integer("stride", 2);
+  if (stride == 0)
+  {
+    throw YoloModelError(layer.where + "stride must not be 0");
+  }
+  return stride > 0 ? LayerShape{previous.channels, previous.height * stride, previous.width * stride}
+                    : LayerShape{previous.channels, previous.height / -std::int64_t{stride},
+                                 previous.width / -std::int64_t{stride}};
+}
+
+/// [reorg]: its output shape.
+LayerShape reorgLayer(const LayerContext& layer, const LayerShape& previous)
+{
+  const int stride = layer.integer("stride", 1);
+  if (stride <= 0 || stride > previous.height || stride > previous.width)
+  {
+    throw YoloModelError(layer.where + "stride must be positive and at most the input's height and width");
+  }
+  return {previous.channels * stride * stride, previous.height / stride, previous.width / stride};
+}
+
+/// [route]: the layers it concatenates, their channels split in `groups`.
+LayerShape routeLayer(const LayerContext& layer)
+{
+  const std::vector<int> layers = cfgIntList(layer.section, "layers", layer.cfg_path);
+  const int groups = layer.integer("groups", 1);
+  if (layers.empty() || groups <= 0)
+  {
+    throw YoloModelError(layer.where + "needs layers= and positive groups");
+  }
+  LayerShape out = layer.layerAt(layers.front());
+  out.channels = 0;
+  for (int reference : layers)
+  {
+    out.channels += layer.layerAt(reference).channels;
+  }
+  out.channels /= groups;
+  return out;
+}
+
+/// [yolo] or [region]: one more detection layer in `info`, all of the same class count.
+void yoloLayer(const LayerContext& layer, DarknetCfgInfo& info)
+{
+  const int classes = layer.integer("classes", 20);
+  if (classes <= 0)
+  {
+    throw YoloModelError(layer.where + "classes must be positive");
+  }
+  if (info.num_classes >= 0 && info.num_classes != classes)
+  {
+    throw YoloModelError(layer.where + "has classes=" + std::to_string(classes) +
+                         " but an earlier layer has " + std::to_string(info.num_classes));
+  }
+  info.num_classes = classes;
+  ++info.yolo_layers;
+}
+
+/// The output shape of a layer whose input is `previous`; its parameters added to `info`.
+/// @throws YoloModelError for an unsupported layer type or a bad value.
+LayerShape layerOutput(const LayerContext& layer, const LayerShape& previous, DarknetCfgInfo& info)
+{
+  const std::string& name = layer.section.name;
+  if (name == "convolutional")
+  {
+    return convolutionalLayer(layer, previous, info);
+  }
+  if (name == "connected")
+  {
+    return connectedLayer(layer, previous, info);
+  }
+  if (name == "maxpool")
+  {
+    return maxpoolLayer(layer, previous);
+  }
+  if (name == "avgpool")
+  {
+    return {previous.channels, 1, 1};
+  }
+  if (name == "upsample")
+  {
+    return upsampleLayer(layer, previous);
+  }
+  if (name == "reorg")
+  {
+    return reorgLayer(layer, previous);
+  }
+  if (name == "route")
+  {
+    return routeLayer(layer);
+  }
+  if (name == "shortcut" || name == "scale_channels" || name == "sam")
+  {
+    for (int reference : cfgIntList(layer.section, "from", layer.cfg_path))
+    {
+      layer.layerAt(reference);
+    }
+  }
+  else if (name == "yolo" || name == "region")
+  {
+    yoloLayer(layer, info);
+  }
+  else if (name != "dropout" && name != "softmax")
+  {
+    throw YoloModelError(layer.where + "unsupported layer type");
+  }
+  return previous;
+}
+
+/// @throws YoloModelError (naming `where`) when a layer's output shape is too large or empty.
+void checkLayerShape(const LayerShape& out, const std::string& where)
+{
+  if (out.channels > kMaxLayerDimension || out.height > kMaxLayerDimension || out.width > kMaxLayerDimension)
+  {
+    throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
+                         std::to_string(out.height) + "x" + std::to_string(out.width) +
+                         " is too large (limit " + std::to_string(kMaxLayerDimension) + " per dimension)");
+  }
+  if (out.channels <= 0 || out.height <= 0 || out.width <= 0)
+  {
+    throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
+                         std::to_string(out.height) + "x" + std::to_string(out.width) + " is empty");
+  }
+}
+
 }  // namespace
 
 YoloOutputLayout yoloOutputLayoutFromString(const std::string& name)
@@ -306,174 +549,13 @@ DarknetCfgInfo parseDarknetCfg(std::istream& input, const std::string& cfg_path)
     throw YoloModelError(cfg_path + ": not a Darknet cfg (the first section must be [net])");
   }
   DarknetCfgInfo info;
-  const CfgSection& net = sections.front();
-  info.input_width = cfgInt(net, "width", 0, cfg_path);
-  info.input_height = cfgInt(net, "height", 0, cfg_path);
-  info.input_channels = cfgInt(net, "channels", 3, cfg_path);
-  if (info.input_width <= 0 || info.input_height <= 0 || info.input_channels <= 0)
-  {
-    throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
-                         ": [net] needs positive width, height and channels");
-  }
-  if (info.input_width > kMaxLayerDimension || info.input_height > kMaxLayerDimension ||
-      info.input_channels > kMaxLayerDimension)
-  {
-    throw YoloModelError(cfg_path + ":" + std::to_string(net.line) +
-                         ": [net] width, height and channels must be at most " +
-                         std::to_string(kMaxLayerDimension));
-  }
-
+  LayerShape previous = netInput(sections.front(), cfg_path, info);
   std::vector<LayerShape> shapes;
-  LayerShape previous{info.input_channels, info.input_height, info.input_width};
   for (std::size_t i = 1; i < sections.size(); ++i)
   {
-    const CfgSection& s = sections[i];
-    const std::string where = cfg_path + ":" + std::to_string(s.line) + ": [" + s.name + "] ";
-    const int index = static_cast<int>(shapes.size());
-    auto layerAt = [&](int reference) -> const LayerShape&
-    {
-      const int absolute = reference < 0 ? index + reference : reference;
-      if (absolute < 0 || absolute >= index)
-      {
-        throw YoloModelError(where + "refers to layer " + std::to_string(reference) +
-                             ", which does not exist");
-      }
-      return shapes[static_cast<std::size_t>(absolute)];
-    };
-    LayerShape out = previous;
-    if (s.name == "convolutional")
-    {
-      const int filters = cfgInt(s, "filters", 1, cfg_path);
-      const int size = cfgInt(s, "size", 1, cfg_path);
-      const int stride = cfgInt(s, "stride", 1, cfg_path);
-      const int groups = cfgInt(s, "groups", 1, cfg_path);
-      const bool batch_normalize = cfgInt(s, "batch_normalize", 0, cfg_path) != 0;
-      int padding = cfgInt(s, "padding", 0, cfg_path);
-      if (cfgInt(s, "pad", 0, cfg_path) != 0)
-      {
-        padding = size / 2;
-      }
-      if (filters <= 0 || size <= 0 || stride <= 0 || groups <= 0 || previous.channels % groups != 0)
-      {
-        throw YoloModelError(where + "needs positive filters, size, stride and groups dividing the " +
-                             std::to_string(previous.channels) + " input channels");
-      }
-      const std::size_t weights = parameterProduct(
-          parameterProduct(static_cast<std::size_t>(filters),
-                           static_cast<std::size_t>(previous.channels / groups), where),
-          parameterProduct(static_cast<std::size_t>(size), static_cast<std::size_t>(size), where), where);
-      info.blocks.push_back({filters, weights, batch_normalize});
-      info.parameters += static_cast<std::size_t>(filters) * (batch_normalize ? 4 : 1) + weights;
-      out = {filters, (previous.height + 2 * std::int64_t{padding} - size) / stride + 1,
-             (previous.width + 2 * std::int64_t{padding} - size) / stride + 1};
-    }
-    else if (s.name == "connected")
-    {
-      const int outputs = cfgInt(s, "output", 1, cfg_path);
-      const bool batch_normalize = cfgInt(s, "batch_normalize", 0, cfg_path) != 0;
-      const std::size_t inputs =
-          parameterProduct(parameterProduct(static_cast<std::size_t>(previous.channels),
-                                            static_cast<std::size_t>(previous.height), where),
-                           static_cast<std::size_t>(previous.width), where);
-      if (outputs <= 0)
-      {
-        throw YoloModelError(where + "output must be positive");
-      }
-      const std::size_t weights = parameterProduct(static_cast<std::size_t>(outputs), inputs, where);
-      info.blocks.push_back({outputs, weights, batch_normalize});
-      info.parameters += weights + static_cast<std::size_t>(outputs) * (batch_normalize ? 4 : 1);
-      out = {outputs, 1, 1};
-    }
-    else if (s.name == "maxpool")
-    {
-      const int stride = cfgInt(s, "stride", 1, cfg_path);
-      const int size = cfgInt(s, "size", stride, cfg_path);
-      const int padding = cfgInt(s, "padding", size - 1, cfg_path);
-      if (stride <= 0 || size <= 0)
-      {
-        throw YoloModelError(where + "needs positive size and stride");
-      }
-      out = {previous.channels, (previous.height + std::int64_t{padding} - size) / stride + 1,
-             (previous.width + std::int64_t{padding} - size) / stride + 1};
-    }
-    else if (s.name == "avgpool")
-    {
-      out = {previous.channels, 1, 1};
-    }
-    else if (s.name == "upsample")
-    {
-      const int stride = cfgInt(s, "stride", 2, cfg_path);
-      if (stride == 0)
-      {
-        throw YoloModelError(where + "stride must not be 0");
-      }
-      out = stride > 0 ? LayerShape{previous.channels, previous.height * stride, previous.width * stride}
-                       : LayerShape{previous.channels, previous.height / -std::int64_t{stride},
-                                    previous.width / -std::int64_t{stride}};
-    }
-    else if (s.name == "reorg")
-    {
-      const int stride = cfgInt(s, "stride", 1, cfg_path);
-      if (stride <= 0 || stride > previous.height || stride > previous.width)
-      {
-        throw YoloModelError(where + "stride must be positive and at most the input's height and width");
-      }
-      out = {previous.channels * stride * stride, previous.height / stride, previous.width / stride};
-    }
-    else if (s.name == "route")
-    {
-      const std::vector<int> layers = cfgIntList(s, "layers", cfg_path);
-      const int groups = cfgInt(s, "groups", 1, cfg_path);
-      if (layers.empty() || groups <= 0)
-      {
-        throw YoloModelError(where + "needs layers= and positive groups");
-      }
-      out = layerAt(layers.front());
-      out.channels = 0;
-      for (int reference : layers)
-      {
-        out.channels += layerAt(reference).channels;
-      }
-      out.channels /= groups;
-    }
-    else if (s.name == "shortcut" || s.name == "scale_channels" || s.name == "sam")
-    {
-      for (int reference : cfgIntList(s, "from", cfg_path))
-      {
-        layerAt(reference);
-      }
-    }
-    else if (s.name == "yolo" || s.name == "region")
-    {
-      const int classes = cfgInt(s, "classes", 20, cfg_path);
-      if (classes <= 0)
-      {
-        throw YoloModelError(where + "classes must be positive");
-      }
-      if (info.num_classes >= 0 && info.num_classes != classes)
-      {
-        throw YoloModelError(where + "has classes=" + std::to_string(classes) + " but an earlier layer has " +
-                             std::to_string(info.num_classes));
-      }
-      info.num_classes = classes;
-      ++info.yolo_layers;
-    }
-    else if (s.name != "dropout" && s.name != "softmax")
-    {
-      throw YoloModelError(where + "unsupported layer type");
-    }
-    if (out.channels > kMaxLayerDimension || out.height > kMaxLayerDimension ||
-        out.width > kMaxLayerDimension)
-    {
-      throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
-                           std::to_string(out.height) + "x" + std::to_string(out.width) +
-                           " is too large (limit " + std::to_string(kMaxLayerDimension) + " per dimension)");
-    }
-    if (out.channels <= 0 || out.height <= 0 || out.width <= 0)
-    {
-      throw YoloModelError(where + "output shape " + std::to_string(out.channels) + "x" +
-                           std::to_string(out.height) + "x" + std::to_string(out.width) + " is empty");
-    }
+    const LayerContext layer(sections[i], cfg_path, shapes);
+    const LayerShape out = layerOutput(layer, previous, info);
+    checkLayerShape(out, layer.where);
     shapes.push_back(out);
     previous = out;
   }

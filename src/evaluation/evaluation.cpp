@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <stdexcept>
@@ -201,6 +202,33 @@ double vocAveragePrecision(const std::vector<double>& recall, const std::vector<
     }
   }
   return ap;
+}
+
+LatencyStats latencyStats(const std::vector<DynamicLatency>& latencies, const std::string& label)
+{
+  std::vector<double> values;
+  LatencyStats stats;
+  for (const DynamicLatency& l : latencies)
+  {
+    if (label.empty() || l.label == label)
+    {
+      values.push_back(l.latency_s >= 0.0 ? l.latency_s : std::numeric_limits<double>::infinity());
+      stats.never += l.latency_s >= 0.0 ? 0 : 1;
+    }
+  }
+  if (values.empty())
+  {
+    return stats;
+  }
+  stats.count = values.size();
+  stats.worst_s = *std::max_element(values.begin(), values.end());
+  // Nearest rank, so that an object never reported dynamic gives +infinity rather than NaN.
+  std::sort(values.begin(), values.end());
+  auto rank = [&](double q)
+  { return values[std::min(values.size() - 1, static_cast<std::size_t>(std::ceil(q * values.size())) - 1)]; };
+  stats.median_s = rank(0.5);
+  stats.p90_s = rank(0.9);
+  return stats;
 }
 
 ErrorStats errorStats(std::vector<double> values)
@@ -405,6 +433,10 @@ void TrackingEvaluationConfig::validate() const
   {
     throw std::invalid_argument("flicker_window_s must be > 0, got " + std::to_string(flicker_window_s));
   }
+  if (!(latency_speed_mps > 0.0))
+  {
+    throw std::invalid_argument("latency_speed_mps must be > 0, got " + std::to_string(latency_speed_mps));
+  }
 }
 
 namespace
@@ -424,6 +456,12 @@ struct TruthTrackState
   bool has_change = false;
   double last_change_s = 0.0;
   bool flickered = false;
+  // Time to the first dynamic verdict.
+  bool moving_seen = false;     ///< matched once while moving at latency_speed_mps or more...
+  double moving_since_s = 0.0;  ///< ...at this time
+  bool dynamic_seen = false;    ///< reported dynamic at or after moving_since_s
+  double latency_s = -1.0;
+  std::string label;
 };
 
 /// Identities of `objects`: their track_id, or a fresh negative id (below −1) where it is −1.
@@ -619,6 +657,19 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
       state.interrupted = false;
       state.last_detection = matched_id;
 
+      const EvalObject& t = ground_truth[g];
+      if (!state.moving_seen && t.has_state && std::hypot(t.vx, t.vy) >= config.latency_speed_mps)
+      {
+        state.moving_seen = true;
+        state.moving_since_s = det.time_s;
+        state.label = t.label;
+      }
+      if (state.moving_seen && !state.dynamic_seen && det.motion == Motion::kDynamic)
+      {
+        state.dynamic_seen = true;
+        state.latency_s = det.time_s - state.moving_since_s;
+      }
+
       const Motion truth_motion = ground_truth[g].motion;
       if (state.has_motion && truth_motion == state.last_truth && truth_motion != Motion::kUnknown)
       {
@@ -656,6 +707,10 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
     m.mostly_tracked += share >= 0.8 ? 1 : 0;
     m.mostly_lost += share < 0.2 ? 1 : 0;
     m.flickering_tracks += state.flickered ? 1 : 0;
+    if (state.moving_seen)
+    {
+      m.dynamic_latency.push_back({state.label, id, state.latency_s});
+    }
   }
   if (m.ground_truth > 0)
   {

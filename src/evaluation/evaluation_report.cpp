@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -79,6 +80,53 @@ std::string jsonStats(const ErrorStats& s)
 {
   return "{\"count\": " + std::to_string(s.count) + ", \"median\": " + number(s.median) +
          ", \"mean\": " + number(s.mean) + ", \"p90\": " + number(s.p90) + "}";
+}
+
+/// Seconds for a report table: "never" when infinite.
+std::string seconds(double value)
+{
+  return std::isfinite(value) ? number(value, 1) : "never";
+}
+
+/// A JSON number, null when not finite (an object never reported dynamic).
+std::string jsonNumber(double value)
+{
+  return std::isfinite(value) ? number(value) : "null";
+}
+
+/// The classes of `latencies`, sorted, with "all" first.
+std::vector<std::string> latencyClasses(const std::vector<DynamicLatency>& latencies)
+{
+  std::set<std::string> labels;
+  for (const DynamicLatency& l : latencies)
+  {
+    labels.insert(l.label);
+  }
+  std::vector<std::string> classes{""};
+  classes.insert(classes.end(), labels.begin(), labels.end());
+  return classes;
+}
+
+std::string jsonLatency(const std::vector<DynamicLatency>& latencies)
+{
+  std::string out = "{";
+  for (const std::string& label : latencyClasses(latencies))
+  {
+    const LatencyStats s = latencyStats(latencies, label);
+    out += (label.empty() ? "" : ", ") + jsonString(label.empty() ? "all" : label) +
+           ": {\"count\": " + std::to_string(s.count) + ", \"median_s\": " + jsonNumber(s.median_s) +
+           ", \"p90_s\": " + jsonNumber(s.p90_s) + ", \"worst_s\": " + jsonNumber(s.worst_s) +
+           ", \"never\": " + std::to_string(s.never) + "}";
+  }
+  out += "}, \"dynamic_latency_tracks\": [";
+  for (std::size_t i = 0; i < latencies.size(); ++i)
+  {
+    const DynamicLatency& l = latencies[i];
+    out += std::string(i ? ", " : "") + "{\"label\": " + jsonString(l.label) +
+           ", \"track_id\": " + std::to_string(l.track_id) +
+           ", \"latency_s\": " + (l.latency_s >= 0.0 ? number(l.latency_s) : std::string("null")) + "}";
+  }
+  return out + "]";
 }
 
 std::string jsonCounts(const MotionCounts& counts)
@@ -236,7 +284,8 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
         << ", \"idfn\": " << t.idfn << ", \"idf1\": " << number(t.idf1) << ", \"idp\": " << number(t.idp)
         << ", \"idr\": " << number(t.idr) << ",\n    \"motion_changes\": " << t.motion_changes
         << ", \"motion_flickers\": " << t.motion_flickers
-        << ", \"flickering_tracks\": " << t.flickering_tracks << "}";
+        << ", \"flickering_tracks\": " << t.flickering_tracks
+        << ",\n    \"dynamic_latency\": " << jsonLatency(t.dynamic_latency) << "}";
   }
   out << "\n}\n";
   return out.str();
@@ -296,6 +345,18 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
            "within the window) | flickering tracks |\n|---|---|---|---|---|---|\n"
         << "| " << t.truth_tracks << " | " << t.mostly_tracked << " | " << t.mostly_lost << " | "
         << t.motion_changes << " | " << t.motion_flickers << " | " << t.flickering_tracks << " |\n";
+    out << "\n## Time to the first dynamic verdict\n\nFrom a moving object's first match (truth at the "
+           "latency speed, 1 m/s by default, or "
+           "more) to its first match reported dynamic [s]; \"never\": not reported dynamic while matched "
+           "(counted as infinite in the percentiles).\n\n| class | objects | median | 90th percentile | "
+           "worst "
+           "| never |\n|---|---|---|---|---|---|\n";
+    for (const std::string& label : latencyClasses(t.dynamic_latency))
+    {
+      const LatencyStats s = latencyStats(t.dynamic_latency, label);
+      out << "| " << (label.empty() ? "all" : label) << " | " << s.count << " | " << seconds(s.median_s)
+          << " | " << seconds(s.p90_s) << " | " << seconds(s.worst_s) << " | " << s.never << " |\n";
+    }
   }
   return out.str();
 }

@@ -99,6 +99,17 @@ void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
   grid_log_ratio_ = 0.0;
 }
 
+void MotionModel::restartAt(const Eigen::Vector2d& position)
+{
+  const double r = config_.position_sigma * config_.position_sigma;
+  standing_ = position;
+  standing_cov_ = r * Eigen::Matrix2d::Identity();
+  moving_.head<2>() = position;
+  moving_cov_.topLeftCorner<2, 2>() = r * Eigen::Matrix2d::Identity();
+  moving_cov_.topRightCorner<2, 2>().setZero();
+  moving_cov_.bottomLeftCorner<2, 2>().setZero();
+}
+
 void MotionModel::predict(double dt)
 {
   if (!(dt > 0.0))

@@ -99,13 +99,15 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     cv::rectangle(image, cv::Point2f(band.u_min, band.v_min), cv::Point2f(band.u_max, band.v_max), kBandColor,
                   1);
     const FusedObject* object = object_of[d];
-    const cv::Scalar color = motionColor(object ? object->motion : Motion::kUnknown);
+    const bool tentative = object && object->track_state == TrackState::kTentative;
+    // A new (tentative) track is drawn grey, as an object without a verdict.
+    const cv::Scalar color = motionColor(object && !tentative ? object->motion : Motion::kUnknown);
     const cv::Point2f top_left(detection.box.x_min, detection.box.y_min);
     cv::rectangle(image, top_left, cv::Point2f(detection.box.x_max, detection.box.y_max), color, 2);
     std::string text = detection.label + " (no grid points)";
-    if (object && object->track_state == TrackState::kTentative)
+    if (tentative)
     {
-      text = trackLabel(object->id, object->motion, detection.label, object->speed()) + " (new)";
+      text = trackLabel(object->id, object->motion, detection.label, object->speed()) + " (new track)";
     }
     else if (object)
     {

@@ -128,8 +128,42 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   {
     track.motion.predict(dt);
   }
+  const std::vector<std::size_t> match = associate(observations);
+  std::vector<std::size_t> track_of(observations.size(), kUnassigned);
+  for (std::size_t t = 0; t < tracks_.size(); ++t)
+  {
+    if (match[t] == kUnassigned)
+    {
+      ++tracks_[t].misses;
+      continue;
+    }
+    updateTrack(tracks_[t], observations[match[t]]);
+    track_of[match[t]] = t;
+  }
+  for (std::size_t o = 0; o < observations.size(); ++o)
+  {
+    if (track_of[o] == kUnassigned)
+    {
+      track_of[o] = tracks_.size();
+      tracks_.push_back(newTrack(observations[o], stamp_s));
+    }
+  }
 
-  // Association: gate, cost, optimal assignment.
+  std::vector<TrackEstimate> estimates;
+  estimates.reserve(observations.size());
+  for (std::size_t o = 0; o < observations.size(); ++o)
+  {
+    estimates.push_back(estimateOf(tracks_[track_of[o]], stamp_s));
+  }
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& track)
+                               { return track.misses > (track.confirmed ? config_.max_misses : 0); }),
+                tracks_.end());
+  return estimates;
+}
+
+std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>& observations) const
+{
   const double gate2 = config_.gate_sigma * config_.gate_sigma;
   CostMatrix cost(tracks_.size(), observations.size());
   for (std::size_t t = 0; t < tracks_.size(); ++t)
@@ -152,69 +186,43 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
       cost.at(t, o) = std::min(d2, gate2) / gate2 + config_.iou_weight * (1.0 - iou);
     }
   }
-  const std::vector<std::size_t> match = solveAssignment(cost);
+  return solveAssignment(cost);
+}
 
-  std::vector<std::size_t> track_of(observations.size(), kUnassigned);
-  for (std::size_t t = 0; t < tracks_.size(); ++t)
+void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
+{
+  const Eigen::Vector2d centre(obs.x, obs.y);
+  if (obs.truncated)
   {
-    Track& track = tracks_[t];
-    if (match[t] == kUnassigned)
-    {
-      ++track.misses;
-      continue;
-    }
-    const TrackObservation& obs = observations[match[t]];
-    const Eigen::Vector2d centre(obs.x, obs.y);
-    if (obs.truncated)
-    {
-      // The box is cut by the image edge: along the object's length its centre follows the
-      // visible part, off by up to half the length the cells miss.
-      const Eigen::Vector2d length(std::cos(obs.length_yaw), std::sin(obs.length_yaw));
-      track.motion.update(centre, length, 0.5 * obs.hidden_length);
-    }
-    else if (positionDistance2(track, obs) <= gate2)
-    {
-      track.motion.update(centre);
-    }
-    else
-    {
-      // Admitted by its box alone: the centre estimate jumped (a partly hidden object, or another
-      // object's cells). Restart the filters there, keeping what they knew of the motion.
-      track.motion.start(centre, track.motion.modeProbability());
-    }
-    track.motion.updateGrid(obs.grid);
-    track.box = obs.box;
-    ++track.hits;
-    track.misses = 0;
-    track.confirmed = track.confirmed || track.hits >= config_.min_hits;
-    track_of[match[t]] = t;
+    // The box is cut by the image edge: along the object's length its centre follows the
+    // visible part, off by up to half the length the cells miss.
+    const Eigen::Vector2d length(std::cos(obs.length_yaw), std::sin(obs.length_yaw));
+    track.motion.update(centre, length, 0.5 * obs.hidden_length);
   }
-  for (std::size_t o = 0; o < observations.size(); ++o)
+  else if (positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma)
   {
-    if (track_of[o] != kUnassigned)
-    {
-      continue;
-    }
-    const TrackObservation& obs = observations[o];
-    Track track{next_id_++, obs.label, MotionModel(config_.motion), obs.box,
-                1,          0,         config_.min_hits <= 1,       stamp_s};
-    track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
-    track.motion.updateGrid(obs.grid);
-    track_of[o] = tracks_.size();
-    tracks_.push_back(std::move(track));
+    track.motion.update(centre);
   }
+  else
+  {
+    // Admitted by its box alone: the centre estimate jumped (a partly hidden object, or another
+    // object's cells). Restart the filters there, keeping what they knew of the motion.
+    track.motion.restartAt(centre);
+  }
+  track.motion.updateGrid(obs.grid);
+  track.box = obs.box;
+  ++track.hits;
+  track.misses = 0;
+  track.confirmed = track.confirmed || track.hits >= config_.min_hits;
+}
 
-  std::vector<TrackEstimate> estimates;
-  estimates.reserve(observations.size());
-  for (std::size_t o = 0; o < observations.size(); ++o)
-  {
-    estimates.push_back(estimateOf(tracks_[track_of[o]], stamp_s));
-  }
-  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
-                               [&](const Track& track)
-                               { return track.misses > (track.confirmed ? config_.max_misses : 0); }),
-                tracks_.end());
-  return estimates;
+Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
+{
+  Track track{next_id_++, obs.label, MotionModel(config_.motion), obs.box,
+              1,          0,         config_.min_hits <= 1,       stamp_s};
+  track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
+  track.motion.updateGrid(obs.grid);
+  return track;
 }
 
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,

@@ -48,47 +48,6 @@ enum Pass : std::uint32_t
   kPassBirth = 3,    // newborn particles
 };
 
-// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
-// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
-// of samples below C. Both use the same comparison, so that counting and stepping agree.
-struct SystematicSamples
-{
-  double u;
-  double step;
-  std::size_t limit;
-
-  bool below(std::size_t k, double cumulative) const
-  {
-    return (u + static_cast<double>(k)) * step < cumulative;
-  }
-
-  std::size_t count(double cumulative) const
-  {
-    const double estimate = std::ceil(cumulative / step - u);
-    std::size_t k =
-        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
-    while (k > 0 && !below(k - 1, cumulative))
-    {
-      --k;
-    }
-    while (k < limit && below(k, cumulative))
-    {
-      ++k;
-    }
-    return k;
-  }
-
-  /// Advances `k` past the samples below `cumulative`, up to `end`.
-  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
-  {
-    while (k < end && below(k, cumulative))
-    {
-      ++k;
-    }
-    return k;
-  }
-};
-
 // Significance of a mean velocity: vx^2 / var_x + vy^2 / var_y (variances floored).
 inline float velocitySignificance(float vx, float vy, float var_x, float var_y)
 {
@@ -163,7 +122,122 @@ Row scaledRow(std::array<double, 3> eps, double dt, double period)
   row.stay = static_cast<float>(1.0 - q_dt);
   return row;
 }
+
+// The constants of one cycle's cell update (eq. 5-7): the rows of the states S, E, U scaled to dt,
+// the motion-driven shares and 1 / the information of a clear measurement.
+struct CellTransitions
+{
+  Row rs;
+  Row re;
+  Row ru;
+  float u_to_d = 0.0F;           // unknown_to_dynamic_by_motion
+  float start = 0.0F;            // static_to_dynamic_by_motion within dt
+  float inv_information = 0.0F;  // 1 / max(p_occupied - 1/2, 1/2 - p_free)
+};
+
+CellTransitions cellTransitions(const DynamicGridConfig& config, double dt_transition)
+{
+  CellTransitions t;
+  t.rs = scaledRow({config.eps_static_to_dynamic, config.eps_static_to_unknown, 0.0}, dt_transition,
+                   config.transition_period);
+  t.re = scaledRow({config.eps_free_to_static, config.eps_free_to_dynamic, config.eps_free_to_unknown},
+                   dt_transition, config.transition_period);
+  t.ru = scaledRow({config.eps_unknown_to_static, config.eps_unknown_to_dynamic, config.eps_unknown_to_free},
+                   dt_transition, config.transition_period);
+  t.inv_information = 1.0F / static_cast<float>(std::max(config.sensor_model.p_occupied - 0.5,
+                                                         0.5 - config.sensor_model.p_free));
+  t.u_to_d = static_cast<float>(config.unknown_to_dynamic_by_motion);
+  t.start = perInterval(config.static_to_dynamic_by_motion, dt_transition, config.transition_period);
+  return t;
+}
+
+// A cell's masses predicted to this scan (eq. 5), before the mass that left with its particles.
+struct PredictedMasses
+{
+  float s_pred;
+  float d_persistent;  // brought by the particles that arrived (eq. 4)
+  float d_started;     // static mass that started moving
+  float d_newborn;     // d_started included
+  float e_pred;
+  float u_pred;
+};
+
+// Eq. 5 for a cell of masses (s, e, u) measured p_o = po, with motion evidence mu and measurement
+// information lambda; d_persistent, from_static, from_unknown: what its particles brought (eq. 4).
+inline PredictedMasses predictMasses(const CellTransitions& t, float s, float e, float u, float po, float mu,
+                                     float lambda, float d_persistent, float from_static, float from_unknown)
+{
+  const Row& rs = t.rs;
+  const Row& re = t.re;
+  const Row& ru = t.ru;
+  // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
+  // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
+  // a cell measured occupied start moving (a static object does not leave a cell in view).
+  const float u_s = lambda * ru.to[0] * (1.0F - t.u_to_d * mu);
+  const float u_d = lambda * (ru.to[1] + ru.to[0] * t.u_to_d * mu);
+  const float u_e = lambda * ru.to[2];
+  const float s_start = po > 0.5F ? std::min(t.start * mu, rs.stay) : 0.0F;
+  PredictedMasses m;
+  m.s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_static;
+  m.d_persistent = d_persistent;
+  m.d_started = s * s_start;
+  m.d_newborn = s * rs.to[0] + m.d_started + e * re.to[1] + u * u_d;
+  m.e_pred = e * re.stay + u * u_e;
+  m.u_pred = s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_unknown;
+  return m;
+}
+
+// The resampling's items of block b (the n particles in particle_blocks blocks, then the born
+// newborn ones): [begin, end) of the particles' or the newborn ones' arrays.
+void itemRange(std::size_t b, std::size_t particle_blocks, std::size_t n, std::size_t born,
+               std::size_t& begin, std::size_t& end)
+{
+  const std::size_t size = b < particle_blocks ? n : born;
+  begin = (b < particle_blocks ? b : b - particle_blocks) * kParticleBlock;
+  end = std::min(size, begin + kParticleBlock);
+}
 }  // namespace
+
+// A systematic sampling: samples at (u + k) * step, k = 0, 1, ... (offset u in [0, 1)), at most
+// `limit` of them. below(k, C): sample k lies below the cumulative mass C; count(C): the number
+// of samples below C. Both use the same comparison, so that counting and stepping agree.
+struct DynamicGridFilter::SystematicSamples
+{
+  double u;
+  double step;
+  std::size_t limit;
+
+  bool below(std::size_t k, double cumulative) const
+  {
+    return (u + static_cast<double>(k)) * step < cumulative;
+  }
+
+  std::size_t count(double cumulative) const
+  {
+    const double estimate = std::ceil(cumulative / step - u);
+    std::size_t k =
+        estimate > 0.0 ? static_cast<std::size_t>(std::min(estimate, static_cast<double>(limit))) : 0;
+    while (k > 0 && !below(k - 1, cumulative))
+    {
+      --k;
+    }
+    while (k < limit && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+
+  /// Advances `k` past the samples below `cumulative`, up to `end`.
+  std::size_t advance(std::size_t k, double cumulative, std::size_t end) const
+  {
+    while (k < end && below(k, cumulative))
+    {
+      ++k;
+    }
+    return k;
+  }
+};
 
 double inverseNormalCdf(double p)
 {
@@ -535,103 +609,18 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t_start = Clock::now();
   DynamicGridCycle cycle;
-  if (initialised_)
-  {
-    const double gap = stamp - last_stamp_;
-    if (gap < 0.0 || gap > config_.max_time_gap)
-    {
-      cycle.reset = true;
-      cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
-                                     : "gap of " + std::to_string(gap) +
-                                           " s since the last scan exceeds max_time_gap (" +
-                                           std::to_string(config_.max_time_gap) + " s)";
-      reset();
-    }
-  }
+  resetAfterTimeJump(stamp, cycle);
   const bool first = !initialised_;
   const double dt = first ? 0.0 : stamp - last_stamp_;
   cycle.dt = dt;
 
   // 1. Ego motion: move the grid by whole cells; particles keep their fixed-frame position.
-  std::int64_t col = 0;
-  std::int64_t row = 0;
-  placeGrid(world_from_sensor, col, row);
-  if (first)
-  {
-    geometry_.origin_col = col;
-    geometry_.origin_row = row;
-  }
-  else
-  {
-    cycle.shift_cols = col - geometry_.origin_col;
-    cycle.shift_rows = row - geometry_.origin_row;
-    const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
-    shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
-               parallel_);
-    geometry_.origin_col = col;
-    geometry_.origin_row = row;
-    // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the
-    // ages and the motion evidence move with the cells too (cells entering the grid: never seen).
-    const int w = geometry_.width;
-    const int h = geometry_.height;
-    if (cycle.shift_cols == 0 && cycle.shift_rows == 0)
-    {
-      previous_mask_ = occupied_mask_;
-    }
-    else
-    {
-      forRowBlocks(
-          [&](std::size_t, int r_begin, int r_end)
-          {
-            for (int r = r_begin; r < r_end; ++r)
-            {
-              const std::int64_t src_r = r + cycle.shift_rows;
-              for (int c = 0; c < w; ++c)
-              {
-                const std::int64_t src_c = c + cycle.shift_cols;
-                const std::size_t dst = geometry_.index(r, c);
-                if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
-                {
-                  const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
-                                          static_cast<std::size_t>(src_c);
-                  previous_mask_[dst] = occupied_mask_[src];
-                  age_scratch_[dst] = ages_[src];
-                  evidence_scratch_[dst] = motion_evidence_[src];
-                }
-                else
-                {
-                  previous_mask_[dst] = 0;
-                  age_scratch_[dst] = kAgesNever;
-                  evidence_scratch_[dst] = 0.0F;
-                }
-              }
-            }
-          });
-      std::swap(ages_, age_scratch_);
-      std::swap(motion_evidence_, evidence_scratch_);
-    }
-    const float sx = static_cast<float>(static_cast<double>(cycle.shift_cols) * geometry_.resolution);
-    const float sy = static_cast<float>(static_cast<double>(cycle.shift_rows) * geometry_.resolution);
-    if (sx != 0.0F || sy != 0.0F)
-    {
-      const std::size_t n = particles_.size();
-      parallel_.run(blockCount(n, kParticleBlock),
-                    [&](std::size_t b)
-                    {
-                      const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
-                      for (std::size_t i = b * kParticleBlock; i < end; ++i)
-                      {
-                        particles_.x[i] -= sx;
-                        particles_.y[i] -= sy;
-                      }
-                    });
-    }
-  }
+  moveGrid(world_from_sensor, first, cycle);
   initialised_ = true;
   last_stamp_ = stamp;
   ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
 
-  // 2. Inverse sensor model: p_o per cell.
+  // 2. Inverse sensor model: p_o per cell; the cells the scan shows vacated or appearing.
   const Clock::time_point t_model = Clock::now();
   if (cloud.size() > 0)
   {
@@ -647,17 +636,143 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   // 3. Particle prediction and the dynamic mass it carries into each cell (eq. 3-4). The first
   // scan has no motion; its transitions use one transition_period so that it counts.
   const double dt_transition = first ? config_.transition_period : dt;
-  const Row rs = scaledRow({config_.eps_static_to_dynamic, config_.eps_static_to_unknown, 0.0}, dt_transition,
-                           config_.transition_period);
-  const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
-                           dt_transition, config_.transition_period);
-  const Row re =
-      scaledRow({config_.eps_free_to_static, config_.eps_free_to_dynamic, config_.eps_free_to_unknown},
-                dt_transition, config_.transition_period);
-  const Row ru =
-      scaledRow({config_.eps_unknown_to_static, config_.eps_unknown_to_dynamic, config_.eps_unknown_to_free},
-                dt_transition, config_.transition_period);
+  clearPredictedMasses();
+  if (!first)
+  {
+    const Row rd = scaledRow({config_.eps_dynamic_to_static, config_.eps_dynamic_to_unknown, 0.0},
+                             dt_transition, config_.transition_period);
+    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
+  }
 
+  // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
+  updateCells(dt_transition);
+
+  // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
+  // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
+  accumulateVelocities(first);
+  estimateCellVelocities();
+
+  // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
+  if (config_.motion_window > 0.0 && config_.propagation_rate > 0.0)
+  {
+    propagateMotion(static_cast<float>(dt_transition));
+  }
+
+  // 8-9. Birth in proportion to the newborn mass, resampling.
+  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
+  ++cycle_;
+  const Clock::time_point t_end = Clock::now();
+  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
+  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
+  return cycle;
+}
+
+void DynamicGridFilter::resetAfterTimeJump(double stamp, DynamicGridCycle& cycle)
+{
+  if (!initialised_)
+  {
+    return;
+  }
+  const double gap = stamp - last_stamp_;
+  if (gap < 0.0 || gap > config_.max_time_gap)
+  {
+    cycle.reset = true;
+    cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
+                                   : "gap of " + std::to_string(gap) +
+                                         " s since the last scan exceeds max_time_gap (" +
+                                         std::to_string(config_.max_time_gap) + " s)";
+    reset();
+  }
+}
+
+void DynamicGridFilter::moveGrid(const Eigen::Isometry3d& world_from_sensor, bool first,
+                                 DynamicGridCycle& cycle)
+{
+  std::int64_t col = 0;
+  std::int64_t row = 0;
+  placeGrid(world_from_sensor, col, row);
+  if (first)
+  {
+    geometry_.origin_col = col;
+    geometry_.origin_row = row;
+    return;
+  }
+  cycle.shift_cols = col - geometry_.origin_col;
+  cycle.shift_rows = row - geometry_.origin_row;
+  const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  shiftCells(cells_, geometry_.width, geometry_.height, cycle.shift_cols, cycle.shift_rows, prior_var,
+             parallel_);
+  geometry_.origin_col = col;
+  geometry_.origin_row = row;
+  shiftScanMemory(cycle.shift_cols, cycle.shift_rows);
+  shiftParticles(cycle.shift_cols, cycle.shift_rows);
+}
+
+void DynamicGridFilter::shiftScanMemory(std::int64_t shift_cols, std::int64_t shift_rows)
+{
+  // The occupied mask of the last scan, moved like the cells: the previous scan's mask; the ages
+  // and the motion evidence move with the cells too (cells entering the grid: never seen).
+  const int w = geometry_.width;
+  const int h = geometry_.height;
+  if (shift_cols == 0 && shift_rows == 0)
+  {
+    previous_mask_ = occupied_mask_;
+    return;
+  }
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          const std::int64_t src_r = r + shift_rows;
+          for (int c = 0; c < w; ++c)
+          {
+            const std::int64_t src_c = c + shift_cols;
+            const std::size_t dst = geometry_.index(r, c);
+            if (src_r >= 0 && src_r < h && src_c >= 0 && src_c < w)
+            {
+              const std::size_t src = static_cast<std::size_t>(src_r) * static_cast<std::size_t>(w) +
+                                      static_cast<std::size_t>(src_c);
+              previous_mask_[dst] = occupied_mask_[src];
+              age_scratch_[dst] = ages_[src];
+              evidence_scratch_[dst] = motion_evidence_[src];
+            }
+            else
+            {
+              previous_mask_[dst] = 0;
+              age_scratch_[dst] = kAgesNever;
+              evidence_scratch_[dst] = 0.0F;
+            }
+          }
+        }
+      });
+  std::swap(ages_, age_scratch_);
+  std::swap(motion_evidence_, evidence_scratch_);
+}
+
+void DynamicGridFilter::shiftParticles(std::int64_t shift_cols, std::int64_t shift_rows)
+{
+  const float sx = static_cast<float>(static_cast<double>(shift_cols) * geometry_.resolution);
+  const float sy = static_cast<float>(static_cast<double>(shift_rows) * geometry_.resolution);
+  if (sx == 0.0F && sy == 0.0F)
+  {
+    return;
+  }
+  const std::size_t n = particles_.size();
+  parallel_.run(blockCount(n, kParticleBlock),
+                [&](std::size_t b)
+                {
+                  const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+                  for (std::size_t i = b * kParticleBlock; i < end; ++i)
+                  {
+                    particles_.x[i] -= sx;
+                    particles_.y[i] -= sy;
+                  }
+                });
+}
+
+void DynamicGridFilter::clearPredictedMasses()
+{
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
       {
@@ -668,19 +783,12 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
       });
-  if (!first)
-  {
-    predictParticles(static_cast<float>(dt), rd.stay, rd.to[0], rd.to[1]);
-  }
-  ParticleArrays& p = particles_;
+}
 
-  // 4-5. Per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split (eq. 7).
-  const float inv_information = 1.0F / static_cast<float>(std::max(config_.sensor_model.p_occupied - 0.5,
-                                                                   0.5 - config_.sensor_model.p_free));
+void DynamicGridFilter::updateCells(double dt_transition)
+{
+  const CellTransitions t = cellTransitions(config_, dt_transition);
   const bool evidence = config_.motion_window > 0.0;
-  const auto u_to_d = static_cast<float>(config_.unknown_to_dynamic_by_motion);
-  const float start =
-      perInterval(config_.static_to_dynamic_by_motion, dt_transition, config_.transition_period);
   const auto gw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
@@ -689,69 +797,42 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
              ++c)
         {
           const float s = cells_.p_static[c];
-          const float e = cells_.p_free[c];
-          const float u = cells_.p_unknown[c];
           const float po = occupancy_[c];
           const float mu = evidence ? motion_evidence_[c] : 0.0F;
           // Unknown becomes known only through an observation: the U -> S/D/E transitions are scaled
           // by the information of this scan's measurement, lambda = |p_o - 1/2| / (p_occ - 1/2)
           // (1 for a cell seen occupied or free, 0 for an unobserved one, whose U mass then stays U
           // instead of drifting to a stale static/free prior while it is shadowed).
-          const float lambda = std::min(std::fabs(po - 0.5F) * inv_information, 1.0F);
-          // Motion evidence mu moves the unknown-to-static share to dynamic (occupancy appearing next
-          // to a vacated cell, or in a cell seen free, has moved there), and lets the static mass of
-          // a cell measured occupied start moving (a static object does not leave a cell in view).
-          const float u_s = lambda * ru.to[0] * (1.0F - u_to_d * mu);
-          const float u_d = lambda * (ru.to[1] + ru.to[0] * u_to_d * mu);
-          const float u_e = lambda * ru.to[2];
-          const float s_start = po > 0.5F ? std::min(start * mu, rs.stay) : 0.0F;
-          const float s_pred = s * (rs.stay - s_start) + e * re.to[0] + u * u_s + from_dynamic_static_[c];
-          const float d_persistent = pred_dynamic_[c];
-          const float d_started = s * s_start;
-          float d_newborn = s * rs.to[0] + d_started + e * re.to[1] + u * u_d;
-          const float e_pred = e * re.stay + u * u_e;
-          float u_pred =
-              s * rs.to[1] + e * re.to[2] + u * (1.0F - u_s - u_d - u_e) + from_dynamic_unknown_[c];
-          const float total = s_pred + d_persistent + d_newborn + e_pred + u_pred;
+          const float lambda = std::min(std::fabs(po - 0.5F) * t.inv_information, 1.0F);
+          PredictedMasses m =
+              predictMasses(t, s, cells_.p_free[c], cells_.p_unknown[c], po, mu, lambda, pred_dynamic_[c],
+                            from_dynamic_static_[c], from_dynamic_unknown_[c]);
+          const float total = m.s_pred + m.d_persistent + m.d_newborn + m.e_pred + m.u_pred;
           float d_vacated = 0.0F;
           if (total < 1.0F)
           {
-            // The mass that moved out of the cell with its particles. vacated_to_dynamic: in an observed
-            // cell the share q = D / (S + D) (1 - exp(-m^2/2)) -- how much the occupant was believed to
-            // move, times the significance m^2 of the velocity that left -- is the next part of the
-            // moving object (newborn dynamic mass with that velocity), the rest of the observed part is
-            // left to the measurement (renormalised away); unobserved, it becomes unknown.
+            // The mass that moved out of the cell with its particles: part of it newborn dynamic
+            // mass (vacated_to_dynamic), the rest unknown.
             const float hole = 1.0F - total;
             if (config_.vacated_to_dynamic)
             {
-              const float occupied = s + cells_.p_dynamic[c];
-              const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
-              if (lambda > 0.0F && moving_share > 0.0F)  // else 0: no exp for most cells
-              {
-                const float m2 =
-                    velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
-                d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
-              }
-              d_newborn += d_vacated;
-              u_pred += (1.0F - lambda) * hole;
-              left_vx_[c] = cells_.vx[c];
-              left_vy_[c] = cells_.vy[c];
-              left_var_x_[c] = cells_.v_var_x[c];
-              left_var_y_[c] = cells_.v_var_y[c];
+              d_vacated = vacatedToDynamic(c, s, lambda, hole);
+              m.d_newborn += d_vacated;
+              m.u_pred += (1.0F - lambda) * hole;
             }
             else
             {
-              u_pred += hole;  // unknown now
+              m.u_pred += hole;  // unknown now
             }
           }
-          vacated_share_[c] = d_newborn > 0.0F ? d_vacated / d_newborn : 0.0F;
-          start_share_[c] = d_newborn > 0.0F ? d_started / d_newborn : 0.0F;
+          vacated_share_[c] = m.d_newborn > 0.0F ? d_vacated / m.d_newborn : 0.0F;
+          start_share_[c] = m.d_newborn > 0.0F ? m.d_started / m.d_newborn : 0.0F;
           propagated_share_[c] = 0.0F;
-          const float ls = po * s_pred;
-          const float ldp = po * d_persistent;
-          const float ldn = po * d_newborn;
-          const float le = (1.0F - po) * e_pred;
-          const float lu = 0.5F * u_pred;
+          const float ls = po * m.s_pred;
+          const float ldp = po * m.d_persistent;
+          const float ldn = po * m.d_newborn;
+          const float le = (1.0F - po) * m.e_pred;
+          const float lu = 0.5F * m.u_pred;
           const float z = ls + ldp + ldn + le + lu;
           const float inv_z = 1.0F / z;
           cells_.p_static[c] = ls * inv_z;
@@ -771,11 +852,34 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           std::fill(v->begin() + begin, v->begin() + end, 0.0F);
         }
       });
+}
 
-  // 6. Persistent weights rescaled so that they sum to the persistent posterior mass (eq. 8);
-  // 7. velocity mean and variance given D per cell from the persistent particles (eq. 9).
+inline float DynamicGridFilter::vacatedToDynamic(std::size_t c, float s, float lambda, float hole)
+{
+  // In an observed cell the share q = D / (S + D) (1 - exp(-m^2/2)) of the hole -- how much the
+  // occupant was believed to move, times the significance m^2 of the velocity that left -- is the
+  // next part of the moving object (newborn dynamic mass with that velocity), the rest of the
+  // observed part is left to the measurement (renormalised away); unobserved, it becomes unknown.
+  float d_vacated = 0.0F;
+  const float occupied = s + cells_.p_dynamic[c];
+  const float moving_share = occupied > 0.0F ? cells_.p_dynamic[c] / occupied : 0.0F;
+  if (lambda > 0.0F && moving_share > 0.0F)  // else 0: no exp for most cells
+  {
+    const float m2 = velocitySignificance(cells_.vx[c], cells_.vy[c], cells_.v_var_x[c], cells_.v_var_y[c]);
+    d_vacated = lambda * hole * moving_share * (1.0F - std::exp(-0.5F * m2));
+  }
+  left_vx_[c] = cells_.vx[c];
+  left_vy_[c] = cells_.vy[c];
+  left_var_x_[c] = cells_.v_var_x[c];
+  left_var_y_[c] = cells_.v_var_y[c];
+  return d_vacated;
+}
+
+void DynamicGridFilter::accumulateVelocities(bool first)
+{
   // Per cell sums in particle order, per part of the grid (the split of the prediction: the
   // cells have not changed since).
+  ParticleArrays& p = particles_;
   auto accumulate = [&](std::size_t i)
   {
     const std::int32_t ci = p.cell[i];
@@ -799,7 +903,12 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
     splitCellsByParticles(false);  // no prediction on the first scan
   }
   forParticlesByCellPart(accumulate);
+}
+
+void DynamicGridFilter::estimateCellVelocities()
+{
   const auto prior_var = static_cast<float>(config_.birth_velocity_sigma * config_.birth_velocity_sigma);
+  const auto gw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
       {
@@ -825,20 +934,6 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
           }
         }
       });
-
-  // Rigid-object prior: static mass on the velocity line of moving cells starts moving.
-  if (evidence && config_.propagation_rate > 0.0)
-  {
-    propagateMotion(static_cast<float>(dt_transition));
-  }
-
-  // 8-9. Birth in proportion to the newborn mass, resampling.
-  cycle.particles_in_use = birthAndResample(cycle.particles_born, static_cast<float>(dt));
-  ++cycle_;
-  const Clock::time_point t_end = Clock::now();
-  cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
-  cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
-  return cycle;
 }
 
 void DynamicGridFilter::findMotionCells(bool first, float dt)
@@ -861,31 +956,53 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
   vacated_.clear();
   if ((evidence && !first) || birth)
   {
-    // Per block of rows, then concatenated in block order: the cells in increasing order.
-    const bool windowed = evidence && !first;
-    const auto uw = static_cast<std::size_t>(geometry_.width);
-    forRowBlocks(
-        [&](std::size_t b, int r_begin, int r_end)
-        {
-          std::vector<std::int32_t>& found = block_candidates_[b];
-          found.clear();
-          for (std::size_t c = static_cast<std::size_t>(r_begin) * uw;
-               c < static_cast<std::size_t>(r_end) * uw; ++c)
-          {
-            const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
-                                                cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
-                                          : previous_mask_[c] && occupancy_[c] < 0.5F;
-            if (vacated)
-            {
-              found.push_back(static_cast<std::int32_t>(c));
-            }
-          }
-        });
-    for (const std::vector<std::int32_t>& found : block_candidates_)
-    {
-      vacated_.insert(vacated_.end(), found.begin(), found.end());
-    }
+    collectVacatedCells(evidence && !first, window);
   }
+  bucketVacatedCells();
+  if (evidence)
+  {
+    // Motion evidence: 1 in a cell that appeared (holds obstacle points now, was seen clearly
+    // free within the window and believed free) or lies within motion_radius of a vacated cell
+    // (box count on a summed-area table); otherwise the previous evidence decayed by
+    // exp(-dt / motion_memory).
+    const bool any_vacated = markVacatedEdges();
+    sumVacatedCounts();
+    spreadMotionEvidence(dt, any_vacated);
+    markAppearedEdges(window, p_hit);
+  }
+  updateAges(evidence, p_hit);
+  have_previous_ = true;
+}
+
+void DynamicGridFilter::collectVacatedCells(bool windowed, int window)
+{
+  // Per block of rows, then concatenated in block order: the cells in increasing order.
+  const auto uw = static_cast<std::size_t>(geometry_.width);
+  forRowBlocks(
+      [&](std::size_t b, int r_begin, int r_end)
+      {
+        std::vector<std::int32_t>& found = block_candidates_[b];
+        found.clear();
+        for (std::size_t c = static_cast<std::size_t>(r_begin) * uw; c < static_cast<std::size_t>(r_end) * uw;
+             ++c)
+        {
+          const bool vacated = windowed ? (ages_[c] & 0xFF) < window && occupancy_[c] <= kClearlyFree &&
+                                              cells_.p_static[c] + cells_.p_dynamic[c] >= kBelievedOccupied
+                                        : previous_mask_[c] && occupancy_[c] < 0.5F;
+          if (vacated)
+          {
+            found.push_back(static_cast<std::int32_t>(c));
+          }
+        }
+      });
+  for (const std::vector<std::int32_t>& found : block_candidates_)
+  {
+    vacated_.insert(vacated_.end(), found.begin(), found.end());
+  }
+}
+
+void DynamicGridFilter::bucketVacatedCells()
+{
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
   bucket_cells_.resize(vacated_.size());
   const auto w = static_cast<std::size_t>(geometry_.width);
@@ -908,165 +1025,182 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
     bucket_cells_[static_cast<std::size_t>(candidates_[bucketOf(c)]++)] = c;
   }
   candidates_.clear();
+}
 
-  if (evidence)
+bool DynamicGridFilter::markVacatedEdges()
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  parallelFill(parallel_, vacated_count_, 0);
+  for (std::int32_t c : vacated_)
   {
-    // Motion evidence: 1 in a cell that appeared (holds obstacle points now, was seen clearly
-    // free within the window and believed free) or lies within motion_radius of a vacated cell
-    // (box count on a summed-area table); otherwise the previous evidence decayed by
-    // exp(-dt / motion_memory).
-    const int gw = geometry_.width;
-    const int gh = geometry_.height;
-    const auto stride = static_cast<std::size_t>(gw + 1);
-    parallelFill(parallel_, vacated_count_, 0);
-    for (std::int32_t c : vacated_)
-    {
-      vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] =
-          1;
-    }
-    // An isolated vacated cell (no other one among its 8 neighbours) is no evidence: what moves
-    // leaves an edge of cells, while sampling artefacts (a sector that misses a surface for one
-    // scan) leave single cells.
-    isolated_.clear();
-    for (std::int32_t c : vacated_)
-    {
-      const int r = c / gw + 1;
-      const int col = c % gw + 1;
-      int neighbours = 0;
-      for (int dr = -1; dr <= 1; ++dr)
-      {
-        for (int dc = -1; dc <= 1; ++dc)
-        {
-          const int rr = r + dr;
-          const int cc = col + dc;
-          if ((dr != 0 || dc != 0) && rr >= 1 && cc >= 1 && rr <= gh && cc <= gw)
-          {
-            neighbours +=
-                vacated_count_[static_cast<std::size_t>(rr) * stride + static_cast<std::size_t>(cc)];
-          }
-        }
-      }
-      if (neighbours == 0)
-      {
-        isolated_.push_back(static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col));
-      }
-    }
-    for (std::size_t i : isolated_)
-    {
-      vacated_count_[i] = 0;
-    }
-    const bool any_vacated = isolated_.size() < vacated_.size();
-    // Summed-area table (integers: exact in any order): prefix sums along the rows, then along
-    // the columns.
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin + 1; r <= r_end; ++r)
-          {
-            std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
-            for (int col = 1; col <= gw; ++col)
-            {
-              row[col] += row[col - 1];
-            }
-          }
-        });
-    constexpr int kColumnBlock = 64;
-    parallel_.run(blockCount(static_cast<std::size_t>(gw), kColumnBlock),
-                  [&](std::size_t b)
-                  {
-                    const int c0 = 1 + static_cast<int>(b) * kColumnBlock;
-                    const int c1 = std::min(gw, c0 + kColumnBlock - 1);
-                    for (int r = 2; r <= gh; ++r)
-                    {
-                      std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
-                      const std::int32_t* above = row - stride;
-                      for (int col = c0; col <= c1; ++col)
-                      {
-                        row[col] += above[col];
-                      }
-                    }
-                  });
-    const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
-    // An appearing surface that was hit next door in the previous scan has not moved there: a
-    // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
-    auto previousHitNear = [&](int r, int col)
-    {
-      for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1); ++rr)
-      {
-        for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1); ++cc)
-        {
-          if (previous_mask_[geometry_.index(rr, cc)])
-          {
-            return true;
-          }
-        }
-      }
-      return false;
-    };
-    const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
-    auto count = [&](int r, int col)
-    { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin; r < r_end; ++r)
-          {
-            const int r0 = std::max(0, r - radius);
-            const int r1 = std::min(gh, r + radius + 1);
-            for (int col = 0; col < gw; ++col)
-            {
-              const std::size_t c = geometry_.index(r, col);
-              float e = decay * motion_evidence_[c];
-              if (any_vacated)
-              {
-                const int c0 = std::max(0, col - radius);
-                const int c1 = std::min(gw, col + radius + 1);
-                if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
-                {
-                  e = 1.0F;
-                }
-              }
-              motion_evidence_[c] = e;
-            }
-          }
-        });
-    // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
-    auto appeared = [&](int r, int col)
-    {
-      const std::size_t c = geometry_.index(r, col);
-      return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
-             !previousHitNear(r, col);
-    };
-    forRowBlocks(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int r = r_begin; r < r_end; ++r)
-          {
-            for (int col = 0; col < gw; ++col)
-            {
-              const std::size_t c = geometry_.index(r, col);
-              if (occupancy_[c] < p_hit || !appeared(r, col))
-              {
-                continue;
-              }
-              bool edge = false;
-              for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
-              {
-                for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
-                {
-                  edge = (rr != r || cc != col) && appeared(rr, cc);
-                }
-              }
-              if (edge)
-              {
-                motion_evidence_[c] = 1.0F;
-              }
-            }
-          }
-        });
+    vacated_count_[static_cast<std::size_t>(c / gw + 1) * stride + static_cast<std::size_t>(c % gw + 1)] = 1;
   }
-  // Ages: scans since the cell last held obstacle points / was seen clearly free (the first for
-  // the fusion's centre estimate in every mode, both for the motion evidence).
+  // An isolated vacated cell (no other one among its 8 neighbours) is no evidence: what moves
+  // leaves an edge of cells, while sampling artefacts (a sector that misses a surface for one
+  // scan) leave single cells.
+  isolated_.clear();
+  for (std::int32_t c : vacated_)
+  {
+    const int r = c / gw + 1;
+    const int col = c % gw + 1;
+    int neighbours = 0;
+    for (int dr = -1; dr <= 1; ++dr)
+    {
+      for (int dc = -1; dc <= 1; ++dc)
+      {
+        const int rr = r + dr;
+        const int cc = col + dc;
+        if ((dr != 0 || dc != 0) && rr >= 1 && cc >= 1 && rr <= gh && cc <= gw)
+        {
+          neighbours += vacated_count_[static_cast<std::size_t>(rr) * stride + static_cast<std::size_t>(cc)];
+        }
+      }
+    }
+    if (neighbours == 0)
+    {
+      isolated_.push_back(static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col));
+    }
+  }
+  for (std::size_t i : isolated_)
+  {
+    vacated_count_[i] = 0;
+  }
+  return isolated_.size() < vacated_.size();
+}
+
+void DynamicGridFilter::sumVacatedCounts()
+{
+  // Integers: exact in any order. Prefix sums along the rows, then along the columns.
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin + 1; r <= r_end; ++r)
+        {
+          std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+          for (int col = 1; col <= gw; ++col)
+          {
+            row[col] += row[col - 1];
+          }
+        }
+      });
+  constexpr int kColumnBlock = 64;
+  parallel_.run(blockCount(static_cast<std::size_t>(gw), kColumnBlock),
+                [&](std::size_t b)
+                {
+                  const int c0 = 1 + static_cast<int>(b) * kColumnBlock;
+                  const int c1 = std::min(gw, c0 + kColumnBlock - 1);
+                  for (int r = 2; r <= gh; ++r)
+                  {
+                    std::int32_t* row = vacated_count_.data() + static_cast<std::size_t>(r) * stride;
+                    const std::int32_t* above = row - stride;
+                    for (int col = c0; col <= c1; ++col)
+                    {
+                      row[col] += above[col];
+                    }
+                  }
+                });
+}
+
+void DynamicGridFilter::spreadMotionEvidence(float dt, bool any_vacated)
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  const auto stride = static_cast<std::size_t>(gw + 1);
+  const int radius = static_cast<int>(std::lround(config_.motion_radius / geometry_.resolution));
+  const float decay = std::exp(-std::max(dt, 0.0F) / static_cast<float>(config_.motion_memory));
+  auto count = [&](int r, int col)
+  { return vacated_count_[static_cast<std::size_t>(r) * stride + static_cast<std::size_t>(col)]; };
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          const int r0 = std::max(0, r - radius);
+          const int r1 = std::min(gh, r + radius + 1);
+          for (int col = 0; col < gw; ++col)
+          {
+            const std::size_t c = geometry_.index(r, col);
+            float e = decay * motion_evidence_[c];
+            if (any_vacated)
+            {
+              const int c0 = std::max(0, col - radius);
+              const int c1 = std::min(gw, col + radius + 1);
+              if (count(r1, c1) - count(r0, c1) - count(r1, c0) + count(r0, c0) > 0)
+              {
+                e = 1.0F;
+              }
+            }
+            motion_evidence_[c] = e;
+          }
+        }
+      });
+}
+
+void DynamicGridFilter::markAppearedEdges(int window, float p_hit)
+{
+  const int gw = geometry_.width;
+  const int gh = geometry_.height;
+  // An appearing surface that was hit next door in the previous scan has not moved there: a
+  // surface on a cell boundary, seen from a changing angle, alternates between the two cells.
+  auto previousHitNear = [&](int r, int col)
+  {
+    for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1); ++rr)
+    {
+      for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1); ++cc)
+      {
+        if (previous_mask_[geometry_.index(rr, cc)])
+        {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  // Appeared cells, which like vacated ones count only with an appeared neighbour (an edge).
+  auto appeared = [&](int r, int col)
+  {
+    const std::size_t c = geometry_.index(r, col);
+    return occupancy_[c] >= p_hit && (ages_[c] >> 8) < window && cells_.p_free[c] >= kBelievedFree &&
+           !previousHitNear(r, col);
+  };
+  forRowBlocks(
+      [&](std::size_t, int r_begin, int r_end)
+      {
+        for (int r = r_begin; r < r_end; ++r)
+        {
+          for (int col = 0; col < gw; ++col)
+          {
+            const std::size_t c = geometry_.index(r, col);
+            if (occupancy_[c] < p_hit || !appeared(r, col))
+            {
+              continue;
+            }
+            bool edge = false;
+            for (int rr = std::max(0, r - 1); rr <= std::min(gh - 1, r + 1) && !edge; ++rr)
+            {
+              for (int cc = std::max(0, col - 1); cc <= std::min(gw - 1, col + 1) && !edge; ++cc)
+              {
+                edge = (rr != r || cc != col) && appeared(rr, cc);
+              }
+            }
+            if (edge)
+            {
+              motion_evidence_[c] = 1.0F;
+            }
+          }
+        }
+      });
+}
+
+void DynamicGridFilter::updateAges(bool evidence, float p_hit)
+{
+  // Scans since the cell last held obstacle points / was seen clearly free (the first for the
+  // fusion's centre estimate in every mode, both for the motion evidence).
   const auto uw = static_cast<std::size_t>(geometry_.width);
   forRowBlocks(
       [&](std::size_t, int r_begin, int r_end)
@@ -1080,7 +1214,6 @@ void DynamicGridFilter::findMotionCells(bool first, float dt)
           occupied_mask_[c] = (evidence ? occupancy_[c] >= p_hit : occupancy_[c] > 0.5F) ? 1 : 0;
         }
       });
-  have_previous_ = true;
 }
 
 void DynamicGridFilter::propagateMotion(float dt)
@@ -1237,10 +1370,14 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   BlockRandom cycle_rng(config_.seed, cycle_, kPassCycle, 0);
   const float u_birth = cycle_rng.uniform();
   const float u_resample = cycle_rng.uniform();
+  born = sampleBirths(u_birth, dt);
+  return resample(u_resample, born);
+}
 
+std::size_t DynamicGridFilter::sampleBirths(float u_birth, float dt)
+{
   // Eq. 10: B = ceil(birth_fraction * N) newborn particles spread over the cells measured
-  // occupied (p_o > 0.5) by systematic sampling of their newborn mass; each newborn particle
-  // of cell c weighs newborn_c / n_c, is uniform in the cell, with v ~ N(0, sigma_b^2 I).
+  // occupied (p_o > 0.5) by systematic sampling of their newborn mass.
   const auto gw = static_cast<std::size_t>(geometry_.width);
   const std::size_t row_blocks = blockCount(static_cast<std::size_t>(geometry_.height), kRowBlock);
   forRowBlocks(
@@ -1256,102 +1393,116 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
       });
   const double newborn_total = blockStarts(block_sum_, row_blocks, block_start_);
   const std::size_t capacity = birth_cell_.size();
-  born = 0;
-  if (newborn_total > 1e-9)
+  if (!(newborn_total > 1e-9))
   {
-    const double step = newborn_total / static_cast<double>(capacity);
-    const SystematicSamples samples{u_birth, step, capacity};
-    born = samples.count(newborn_total);
-    const float res = static_cast<float>(geometry_.resolution);
-    const float sb = static_cast<float>(config_.birth_velocity_sigma);
-    const auto fraction = static_cast<float>(config_.birth_motion_fraction);
-    forRowBlocks(
-        [&](std::size_t b, int r_begin, int r_end)
-        {
-          const std::size_t c_begin = static_cast<std::size_t>(r_begin) * gw;
-          std::size_t c_last = static_cast<std::size_t>(r_end) * gw;  // the block's last cell with mass
-          while (c_last > c_begin && newborn_[c_last - 1] <= 0.0F)
-          {
-            --c_last;
-          }
-          if (c_last == c_begin)
-          {
-            return;
-          }
-          --c_last;
-          BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
-          std::vector<std::int32_t>& candidates = block_candidates_[b];
-          const std::size_t block_end = samples.count(block_start_[b + 1]);
-          double cumulative = block_start_[b];
-          std::size_t first = samples.count(cumulative);
-          for (std::size_t c = c_begin; c <= c_last; ++c)
-          {
-            if (newborn_[c] <= 0.0F)
-            {
-              continue;
-            }
-            cumulative += newborn_[c];
-            const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
-            const std::size_t count = end - first;
-            if (count == 0)
-            {
-              continue;
-            }
-            const float w = newborn_[c] / static_cast<float>(count);
-            const int row = static_cast<int>(c / gw);
-            const int col = static_cast<int>(c % gw);
-            const bool appearing = !vacated_.empty() && !previous_mask_[c];
-            // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity),
-            // vacated (the velocity that left the cell), started (a motion-driven velocity); the
-            // rest takes the cell's velocity estimate where it has persistent particles and motion
-            // evidence (inherit_birth_velocity), a motion-driven velocity in an appearing cell
-            // (birth_motion_fraction), else a random one.
-            const float to_propagated = propagated_share_[c];
-            const float to_vacated = to_propagated + vacated_share_[c];
-            const float to_started = to_vacated + start_share_[c];
-            const bool inherit =
-                config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
-            for (std::size_t k = first; k < end; ++k)
-            {
-              birth_cell_[k] = static_cast<std::int32_t>(c);
-              birth_x_[k] = (static_cast<float>(col) + rng.uniform()) * res;
-              birth_y_[k] = (static_cast<float>(row) + rng.uniform()) * res;
-              const float origin = to_started > 0.0F ? rng.uniform() : 1.0F;
-              if (origin < to_propagated)
-              {
-                birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normalSample(rng);
-                birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normalSample(rng);
-              }
-              else if (origin < to_vacated)
-              {
-                birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normalSample(rng);
-                birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normalSample(rng);
-              }
-              else if (origin < to_started && motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k],
-                                                             birth_vy_[k], rng, candidates))
-              {
-              }
-              else if (inherit)
-              {
-                birth_vx_[k] = cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) *
-                                                  normalSample(rng);
-                birth_vy_[k] = cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) *
-                                                  normalSample(rng);
-              }
-              else if (!(appearing && rng.uniform() < fraction &&
-                         motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng,
-                                        candidates)))
-              {
-                birth_vx_[k] = sb * normalSample(rng);
-                birth_vy_[k] = sb * normalSample(rng);
-              }
-              birth_w_[k] = w;
-            }
-            first = end;
-          }
-        });
+    return 0;
   }
+  const double step = newborn_total / static_cast<double>(capacity);
+  const SystematicSamples samples{u_birth, step, capacity};
+  forRowBlocks([&](std::size_t b, int r_begin, int r_end)
+               { birthInRowBlock(b, r_begin, r_end, samples, dt); });
+  return samples.count(newborn_total);
+}
 
+void DynamicGridFilter::birthInRowBlock(std::size_t b, int r_begin, int r_end,
+                                        const SystematicSamples& samples, float dt)
+{
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  const std::size_t c_begin = static_cast<std::size_t>(r_begin) * gw;
+  std::size_t c_last = static_cast<std::size_t>(r_end) * gw;  // the block's last cell with mass
+  while (c_last > c_begin && newborn_[c_last - 1] <= 0.0F)
+  {
+    --c_last;
+  }
+  if (c_last == c_begin)
+  {
+    return;
+  }
+  --c_last;
+  BlockRandom rng(config_.seed, cycle_, kPassBirth, b);
+  std::vector<std::int32_t>& candidates = block_candidates_[b];
+  const std::size_t block_end = samples.count(block_start_[b + 1]);
+  double cumulative = block_start_[b];
+  std::size_t first = samples.count(cumulative);
+  for (std::size_t c = c_begin; c <= c_last; ++c)
+  {
+    if (newborn_[c] <= 0.0F)
+    {
+      continue;
+    }
+    cumulative += newborn_[c];
+    const std::size_t end = c == c_last ? block_end : samples.advance(first, cumulative, block_end);
+    if (end - first == 0)
+    {
+      continue;
+    }
+    bearParticles(c, first, end, dt, rng, candidates);
+    first = end;
+  }
+}
+
+void DynamicGridFilter::bearParticles(std::size_t c, std::size_t first, std::size_t end, float dt,
+                                      BlockRandom& rng, std::vector<std::int32_t>& candidates)
+{
+  // Each newborn particle of cell c weighs newborn_c / n_c and is uniform in the cell.
+  const float res = static_cast<float>(geometry_.resolution);
+  const float sb = static_cast<float>(config_.birth_velocity_sigma);
+  const auto fraction = static_cast<float>(config_.birth_motion_fraction);
+  const auto gw = static_cast<std::size_t>(geometry_.width);
+  const std::size_t count = end - first;
+  const float w = newborn_[c] / static_cast<float>(count);
+  const int row = static_cast<int>(c / gw);
+  const int col = static_cast<int>(c % gw);
+  const bool appearing = !vacated_.empty() && !previous_mask_[c];
+  // Newborn mass by origin (shares of newborn_[c]): propagated (the source's velocity), vacated
+  // (the velocity that left the cell), started (a motion-driven velocity); the rest takes the
+  // cell's velocity estimate where it has persistent particles and motion evidence
+  // (inherit_birth_velocity), a motion-driven velocity in an appearing cell
+  // (birth_motion_fraction), else a random one, v ~ N(0, sigma_b^2 I).
+  const float to_propagated = propagated_share_[c];
+  const float to_vacated = to_propagated + vacated_share_[c];
+  const float to_started = to_vacated + start_share_[c];
+  const bool inherit =
+      config_.inherit_birth_velocity && stat_w_[c] > 1e-6F && motion_evidence_[c] >= kEvidenceGate;
+  for (std::size_t k = first; k < end; ++k)
+  {
+    birth_cell_[k] = static_cast<std::int32_t>(c);
+    birth_x_[k] = (static_cast<float>(col) + rng.uniform()) * res;
+    birth_y_[k] = (static_cast<float>(row) + rng.uniform()) * res;
+    const float origin = to_started > 0.0F ? rng.uniform() : 1.0F;
+    if (origin < to_propagated)
+    {
+      birth_vx_[k] = source_vx_[c] + std::sqrt(source_var_x_[c]) * normalSample(rng);
+      birth_vy_[k] = source_vy_[c] + std::sqrt(source_var_y_[c]) * normalSample(rng);
+    }
+    else if (origin < to_vacated)
+    {
+      birth_vx_[k] = left_vx_[c] + std::sqrt(left_var_x_[c]) * normalSample(rng);
+      birth_vy_[k] = left_vy_[c] + std::sqrt(left_var_y_[c]) * normalSample(rng);
+    }
+    else if (origin < to_started &&
+             motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng, candidates))
+    {
+    }
+    else if (inherit)
+    {
+      birth_vx_[k] =
+          cells_.vx[c] + std::sqrt(std::max(cells_.v_var_x[c], kInheritVarianceFloor)) * normalSample(rng);
+      birth_vy_[k] =
+          cells_.vy[c] + std::sqrt(std::max(cells_.v_var_y[c], kInheritVarianceFloor)) * normalSample(rng);
+    }
+    else if (!(appearing && rng.uniform() < fraction &&
+               motionVelocity(c, birth_x_[k], birth_y_[k], dt, birth_vx_[k], birth_vy_[k], rng, candidates)))
+    {
+      birth_vx_[k] = sb * normalSample(rng);
+      birth_vy_[k] = sb * normalSample(rng);
+    }
+    birth_w_[k] = w;
+  }
+}
+
+std::size_t DynamicGridFilter::resample(float u_resample, std::size_t born)
+{
   // Eq. 11: systematic resampling of the persistent and newborn particles to N particles of
   // equal weight W / N, W = their total weight (the dynamic mass carried stays the same). The
   // items: the particles, then the newborn ones, in blocks of kParticleBlock.
@@ -1359,19 +1510,12 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
   const std::size_t n = p.size();
   const std::size_t particle_blocks = blockCount(n, kParticleBlock);
   const std::size_t item_blocks = particle_blocks + blockCount(born, kParticleBlock);
-  // Item i of block b: weight, and its state.
-  auto itemRange = [&](std::size_t b, std::size_t& begin, std::size_t& end)
-  {
-    const std::size_t size = b < particle_blocks ? n : born;
-    begin = (b < particle_blocks ? b : b - particle_blocks) * kParticleBlock;
-    end = std::min(size, begin + kParticleBlock);
-  };
   parallel_.run(item_blocks,
                 [&](std::size_t b)
                 {
                   std::size_t begin = 0;
                   std::size_t end = 0;
-                  itemRange(b, begin, end);
+                  itemRange(b, particle_blocks, n, born, begin, end);
                   const float* weight = b < particle_blocks ? p.weight.data() : birth_w_.data();
                   double sum = 0.0;
                   for (std::size_t i = begin; i < end; ++i)
@@ -1391,61 +1535,64 @@ std::size_t DynamicGridFilter::birthAndResample(std::size_t& born, float dt)
     return 0;
   }
   const double step = total / static_cast<double>(n);
-  const auto w_out = static_cast<float>(step);
   const SystematicSamples samples{u_resample, step, n};
   const std::size_t in_use = samples.count(total);
-  ParticleArrays& r = resampled_;
-  parallel_.run(item_blocks,
-                [&](std::size_t b)
-                {
-                  std::size_t begin = 0;
-                  std::size_t end = 0;
-                  itemRange(b, begin, end);
-                  const bool newborn = b >= particle_blocks;
-                  const float* x = newborn ? birth_x_.data() : p.x.data();
-                  const float* y = newborn ? birth_y_.data() : p.y.data();
-                  const float* vx = newborn ? birth_vx_.data() : p.vx.data();
-                  const float* vy = newborn ? birth_vy_.data() : p.vy.data();
-                  const float* weight = newborn ? birth_w_.data() : p.weight.data();
-                  const std::int32_t* cell = newborn ? birth_cell_.data() : p.cell.data();
-                  std::size_t last = end;  // the block's last item with weight
-                  while (last > begin && !(weight[last - 1] > 0.0F))
-                  {
-                    --last;
-                  }
-                  if (last == begin)
-                  {
-                    return;
-                  }
-                  --last;
-                  const std::size_t block_end = samples.count(block_start_[b + 1]);
-                  double cumulative = block_start_[b];
-                  std::size_t out = samples.count(cumulative);
-                  for (std::size_t i = begin; i <= last; ++i)
-                  {
-                    if (!(weight[i] > 0.0F))
-                    {
-                      continue;
-                    }
-                    cumulative += weight[i];
-                    const std::size_t out_end =
-                        i == last ? block_end : samples.advance(out, cumulative, block_end);
-                    for (; out < out_end; ++out)
-                    {
-                      r.x[out] = x[i];
-                      r.y[out] = y[i];
-                      r.vx[out] = vx[i];
-                      r.vy[out] = vy[i];
-                      r.weight[out] = w_out;
-                      r.cell[out] = cell[i];
-                    }
-                  }
-                });
+  parallel_.run(item_blocks, [&](std::size_t b) { resampleBlock(b, particle_blocks, born, samples); });
   // Rounding at the very end: no particle left to copy.
+  ParticleArrays& r = resampled_;
   std::fill(r.weight.begin() + static_cast<std::ptrdiff_t>(in_use), r.weight.end(), 0.0F);
   std::fill(r.cell.begin() + static_cast<std::ptrdiff_t>(in_use), r.cell.end(), -1);
   std::swap(particles_, resampled_);
   return in_use;
+}
+
+void DynamicGridFilter::resampleBlock(std::size_t b, std::size_t particle_blocks, std::size_t born,
+                                      const SystematicSamples& samples)
+{
+  const ParticleArrays& p = particles_;
+  ParticleArrays& r = resampled_;
+  const auto w_out = static_cast<float>(samples.step);
+  std::size_t begin = 0;
+  std::size_t end = 0;
+  itemRange(b, particle_blocks, p.size(), born, begin, end);
+  const bool newborn = b >= particle_blocks;
+  const float* x = newborn ? birth_x_.data() : p.x.data();
+  const float* y = newborn ? birth_y_.data() : p.y.data();
+  const float* vx = newborn ? birth_vx_.data() : p.vx.data();
+  const float* vy = newborn ? birth_vy_.data() : p.vy.data();
+  const float* weight = newborn ? birth_w_.data() : p.weight.data();
+  const std::int32_t* cell = newborn ? birth_cell_.data() : p.cell.data();
+  std::size_t last = end;  // the block's last item with weight
+  while (last > begin && !(weight[last - 1] > 0.0F))
+  {
+    --last;
+  }
+  if (last == begin)
+  {
+    return;
+  }
+  --last;
+  const std::size_t block_end = samples.count(block_start_[b + 1]);
+  double cumulative = block_start_[b];
+  std::size_t out = samples.count(cumulative);
+  for (std::size_t i = begin; i <= last; ++i)
+  {
+    if (!(weight[i] > 0.0F))
+    {
+      continue;
+    }
+    cumulative += weight[i];
+    const std::size_t out_end = i == last ? block_end : samples.advance(out, cumulative, block_end);
+    for (; out < out_end; ++out)
+    {
+      r.x[out] = x[i];
+      r.y[out] = y[i];
+      r.vx[out] = vx[i];
+      r.vy[out] = vy[i];
+      r.weight[out] = w_out;
+      r.cell[out] = cell[i];
+    }
+  }
 }
 
 void DynamicGridFilter::setClassification(const DynamicGridConfig& thresholds)

@@ -14,6 +14,12 @@ namespace
 {
 constexpr float kPi = 3.14159265358979323846F;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// Blocks of a fixed size (points, sectors, grid rows, grid columns): per-block counters summed in
+// block order and per-sector minima / maxima make the result independent of the thread count.
+constexpr std::size_t kPointBlock = 8192;
+constexpr std::size_t kSectorBlock = 16;
+constexpr int kRowBlock = 8;
+constexpr int kColumnBlock = 64;
 
 void require(bool condition, const char* field, const std::string& what)
 {
@@ -55,6 +61,40 @@ float readFloat(const std::uint8_t* p)
   float v;
   std::memcpy(&v, p, sizeof(float));
   return v;
+}
+
+/// f(block, first_point, end_point) for the blocks of kPointBlock of `points` points.
+template <typename F>
+void forPointBlocks(const ParallelBlocks& parallel, std::size_t points, const F& f)
+{
+  parallel.run(blockCount(points, kPointBlock),
+               [&](std::size_t b) { f(b, b * kPointBlock, std::min(points, (b + 1) * kPointBlock)); });
+}
+
+/// f(block, first_row, end_row) for the blocks of kRowBlock rows of `grid`.
+template <typename F>
+void forRowBlocks(const ParallelBlocks& parallel, const GridGeometry& grid, const F& f)
+{
+  parallel.run(blockCount(static_cast<std::size_t>(grid.height), kRowBlock),
+               [&](std::size_t b)
+               {
+                 const int r0 = static_cast<int>(b) * kRowBlock;
+                 f(b, r0, std::min(grid.height, r0 + kRowBlock));
+               });
+}
+
+/// f(sector) for every one of `sectors` sectors, in blocks of kSectorBlock sectors.
+template <typename F>
+void forSectors(const ParallelBlocks& parallel, std::size_t sectors, const F& f)
+{
+  parallel.run(blockCount(sectors, kSectorBlock),
+               [&](std::size_t sb)
+               {
+                 for (std::size_t s = sb * kSectorBlock; s < std::min(sectors, (sb + 1) * kSectorBlock); ++s)
+                 {
+                   f(s);
+                 }
+               });
 }
 }  // namespace
 
@@ -134,55 +174,79 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
                                                     const GridGeometry& grid, std::vector<float>& occupancy,
                                                     const ParallelBlocks& parallel)
 {
-  // Blocks of a fixed size (points, sectors, grid rows); per-block counters summed in block order
-  // and per-sector minima / maxima: the result does not depend on the thread count.
-  constexpr std::size_t kPointBlock = 8192;
-  constexpr std::size_t kSectorBlock = 16;
-  constexpr int kRowBlock = 8;
   InverseSensorModelStats stats;
   stats.points = cloud.size();
-  const Eigen::Matrix3f rot = world_from_sensor.linear().cast<float>();
+  const std::size_t point_blocks = blockCount(cloud.size(), kPointBlock);
+  const std::size_t row_blocks = blockCount(static_cast<std::size_t>(grid.height), kRowBlock);
   const Eigen::Vector3d origin = world_from_sensor.translation();
+  const double ox = origin.x() - grid.originX();
+  const double oy = origin.y() - grid.originY();
+  prepareBuffers(cloud.size(), std::max(point_blocks, row_blocks), parallel);
+
+  // Points into the world-aligned sensor-centred polar frame; the ground along each sector from
+  // the lowest point of each range bin.
+  binPoints(cloud, world_from_sensor.linear().cast<float>(), parallel);
+  addBlockStats(point_blocks, stats);
+  lowestPointPerBin(cloud.size());
+  estimateGround(parallel);
+
+  // Points classified against the ground; per sector the nearest obstacle hit and the farthest
+  // return; the cells holding obstacle points (and, hit_neighbours_not_free, their neighbours).
+  classifyPoints(grid, ox, oy, parallel);
+  addBlockStats(point_blocks, stats);
+  combineSectorRanges(point_blocks, parallel);
+  markHitCells(grid, parallel);
+  if (config_.hit_neighbours_not_free)
+  {
+    dilateHits(grid, parallel);
+  }
+
+  // Polar ray casting: p_o of every cell.
+  castRays(grid, ox, oy, occupancy, parallel);
+  addBlockStats(row_blocks, stats);
+  return stats;
+}
+
+void InverseSensorModel::prepareBuffers(std::size_t points, std::size_t stat_blocks,
+                                        const ParallelBlocks& parallel)
+{
+  const auto sectors = static_cast<std::size_t>(sectors_);
+  const std::size_t point_blocks = blockCount(points, kPointBlock);
+  parallelFill(parallel, bin_min_z_, kInf);
+  point_bin_.resize(points);
+  point_x_.resize(points);
+  point_y_.resize(points);
+  point_dz_.resize(points);
+  point_cell_.resize(points);
+  block_stats_.assign(stat_blocks, InverseSensorModelStats());
+  block_first_hit_.resize(point_blocks * sectors);
+  block_farthest_.resize(point_blocks * sectors);
+}
+
+void InverseSensorModel::addBlockStats(std::size_t blocks, InverseSensorModelStats& stats)
+{
+  for (std::size_t b = 0; b < blocks; ++b)
+  {
+    const InverseSensorModelStats& s = block_stats_[b];
+    stats.invalid_points += s.invalid_points;
+    stats.out_of_range += s.out_of_range;
+    stats.ground_points += s.ground_points;
+    stats.obstacle_points += s.obstacle_points;
+    stats.overhang_points += s.overhang_points;
+    stats.occupied_cells += s.occupied_cells;
+    block_stats_[b] = InverseSensorModelStats();
+  }
+}
+
+void InverseSensorModel::binPoints(const PointCloudView& cloud, const Eigen::Matrix3f& rot,
+                                   const ParallelBlocks& parallel)
+{
   const float min_r2 = static_cast<float>(config_.min_range * config_.min_range);
   const float max_r2 = static_cast<float>(config_.max_range * config_.max_range);
   const float inv_range_res = static_cast<float>(1.0 / config_.range_resolution);
   const auto bins = static_cast<std::size_t>(range_bins_);
-  const auto sectors = static_cast<std::size_t>(sectors_);
-
-  parallelFill(parallel, bin_min_z_, kInf);
-  const std::size_t n = cloud.size();
-  point_bin_.resize(n);
-  point_x_.resize(n);
-  point_y_.resize(n);
-  point_dz_.resize(n);
-  point_cell_.resize(n);
-  const std::size_t point_blocks = blockCount(n, kPointBlock);
-  const std::size_t row_blocks = blockCount(static_cast<std::size_t>(grid.height), kRowBlock);
-  block_stats_.assign(std::max(point_blocks, row_blocks), InverseSensorModelStats());
-  block_first_hit_.resize(point_blocks * sectors);
-  block_farthest_.resize(point_blocks * sectors);
-  auto forPoints = [&](const auto& f)
-  {
-    parallel.run(point_blocks,
-                 [&](std::size_t b) { f(b, b * kPointBlock, std::min(n, (b + 1) * kPointBlock)); });
-  };
-  auto sumStats = [&](std::size_t blocks)
-  {
-    for (std::size_t b = 0; b < blocks; ++b)
-    {
-      const InverseSensorModelStats& s = block_stats_[b];
-      stats.invalid_points += s.invalid_points;
-      stats.out_of_range += s.out_of_range;
-      stats.ground_points += s.ground_points;
-      stats.obstacle_points += s.obstacle_points;
-      stats.overhang_points += s.overhang_points;
-      stats.occupied_cells += s.occupied_cells;
-      block_stats_[b] = InverseSensorModelStats();
-    }
-  };
-
-  // Pass 1: points into the world-aligned sensor-centred polar frame; lowest z per bin.
-  forPoints(
+  forPointBlocks(
+      parallel, cloud.size(),
       [&](std::size_t b, std::size_t begin, std::size_t end)
       {
         InverseSensorModelStats& bs = block_stats_[b];
@@ -219,8 +283,11 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
           point_dz_[i] = d.z();
         }
       });
-  sumStats(point_blocks);
-  for (std::size_t i = 0; i < n; ++i)  // a minimum: the same in any order
+}
+
+void InverseSensorModel::lowestPointPerBin(std::size_t points)
+{
+  for (std::size_t i = 0; i < points; ++i)  // a minimum: the same in any order
   {
     const std::int32_t bin = point_bin_[i];
     if (bin >= 0)
@@ -229,172 +296,172 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
       z = std::min(z, point_dz_[i]);
     }
   }
+}
 
-  // Ground height along each sector: a bin's lowest point is ground when it lies within
-  // ground_tolerance + max_ground_slope * (distance to the last ground bin) of that bin's
-  // height; bins without accepted ground keep the last ground height.
+void InverseSensorModel::estimateGround(const ParallelBlocks& parallel)
+{
+  // A bin's lowest point is ground when it lies within ground_tolerance + max_ground_slope *
+  // (distance to the last ground bin) of that bin's height; bins without accepted ground keep the
+  // last ground height.
   const float tol = static_cast<float>(config_.ground_tolerance);
   const float slope = static_cast<float>(config_.max_ground_slope);
   const float res = static_cast<float>(config_.range_resolution);
-  parallel.run(blockCount(sectors, kSectorBlock),
-               [&](std::size_t sb)
+  const auto bins = static_cast<std::size_t>(range_bins_);
+  forSectors(parallel, static_cast<std::size_t>(sectors_),
+             [&](std::size_t s)
+             {
+               float g = static_cast<float>(-config_.sensor_height);
+               float r_prev = 0.0F;
+               const std::size_t base = s * bins;
+               for (int b = 0; b < range_bins_; ++b)
                {
-                 for (std::size_t s = sb * kSectorBlock; s < std::min(sectors, (sb + 1) * kSectorBlock); ++s)
+                 const float z = bin_min_z_[base + static_cast<std::size_t>(b)];
+                 const float r = (static_cast<float>(b) + 0.5F) * res;
+                 if (z < kInf && std::fabs(z - g) <= tol + slope * (r - r_prev))
                  {
-                   float g = static_cast<float>(-config_.sensor_height);
-                   float r_prev = 0.0F;
-                   const std::size_t base = s * bins;
-                   for (int b = 0; b < range_bins_; ++b)
-                   {
-                     const float z = bin_min_z_[base + static_cast<std::size_t>(b)];
-                     const float r = (static_cast<float>(b) + 0.5F) * res;
-                     if (z < kInf && std::fabs(z - g) <= tol + slope * (r - r_prev))
-                     {
-                       g = z;
-                       r_prev = r;
-                     }
-                     ground_z_[base + static_cast<std::size_t>(b)] = g;
-                   }
+                   g = z;
+                   r_prev = r;
                  }
-               });
+                 ground_z_[base + static_cast<std::size_t>(b)] = g;
+               }
+             });
+}
 
-  // Pass 2: classify points; nearest obstacle hit and farthest return per sector (per block,
-  // then combined); cells holding obstacle points.
-  occupancy.resize(grid.cellCount());
-  cell_hit_.resize(grid.cellCount());
-  parallelFill(parallel, cell_hit_, std::uint8_t{0});
+void InverseSensorModel::classifyPoints(const GridGeometry& grid, double ox, double oy,
+                                        const ParallelBlocks& parallel)
+{
   const float h_min = static_cast<float>(config_.min_obstacle_height);
   const float h_max = static_cast<float>(config_.max_obstacle_height);
-  const double ox = origin.x() - grid.originX();
-  const double oy = origin.y() - grid.originY();
   const double inv_cell = 1.0 / grid.resolution;
-  forPoints(
-      [&](std::size_t blk, std::size_t begin, std::size_t end)
-      {
-        InverseSensorModelStats& bs = block_stats_[blk];
-        float* first_hit = block_first_hit_.data() + blk * sectors;
-        float* farthest = block_farthest_.data() + blk * sectors;
-        std::fill(first_hit, first_hit + sectors, kInf);
-        std::fill(farthest, farthest + sectors, 0.0F);
-        for (std::size_t k = begin; k < end; ++k)
-        {
-          point_cell_[k] = -1;
-          const std::int32_t bin = point_bin_[k];
-          if (bin < 0)
-          {
-            continue;
-          }
-          const auto sector = static_cast<std::size_t>(bin) / bins;
-          const float h = point_dz_[k] - ground_z_[static_cast<std::size_t>(bin)];
-          const float r = std::sqrt(point_x_[k] * point_x_[k] + point_y_[k] * point_y_[k]);
-          if (h > h_max)
-          {
-            ++bs.overhang_points;
-            continue;
-          }
-          farthest[sector] = std::max(farthest[sector], r);
-          if (h < h_min)
-          {
-            ++bs.ground_points;
-            continue;
-          }
-          ++bs.obstacle_points;
-          first_hit[sector] = std::min(first_hit[sector], r);
-          const double fc = std::floor((ox + point_x_[k]) * inv_cell);
-          const double fr = std::floor((oy + point_y_[k]) * inv_cell);
-          if (fc >= 0.0 && fr >= 0.0 && fc < grid.width && fr < grid.height)
-          {
-            point_cell_[k] =
-                static_cast<std::int32_t>(grid.index(static_cast<int>(fr), static_cast<int>(fc)));
-          }
-        }
-      });
-  sumStats(point_blocks);
-  parallel.run(blockCount(sectors, kSectorBlock),
-               [&](std::size_t sb)
-               {
-                 for (std::size_t s = sb * kSectorBlock; s < std::min(sectors, (sb + 1) * kSectorBlock); ++s)
+  const auto bins = static_cast<std::size_t>(range_bins_);
+  const auto sectors = static_cast<std::size_t>(sectors_);
+  forPointBlocks(parallel, point_bin_.size(),
+                 [&](std::size_t blk, std::size_t begin, std::size_t end)
                  {
-                   float hit = kInf;
-                   float far = 0.0F;
-                   for (std::size_t b = 0; b < point_blocks; ++b)
+                   InverseSensorModelStats& bs = block_stats_[blk];
+                   float* first_hit = block_first_hit_.data() + blk * sectors;
+                   float* farthest = block_farthest_.data() + blk * sectors;
+                   std::fill(first_hit, first_hit + sectors, kInf);
+                   std::fill(farthest, farthest + sectors, 0.0F);
+                   for (std::size_t k = begin; k < end; ++k)
                    {
-                     hit = std::min(hit, block_first_hit_[b * sectors + s]);
-                     far = std::max(far, block_farthest_[b * sectors + s]);
+                     point_cell_[k] = -1;
+                     const std::int32_t bin = point_bin_[k];
+                     if (bin < 0)
+                     {
+                       continue;
+                     }
+                     const auto sector = static_cast<std::size_t>(bin) / bins;
+                     const float h = point_dz_[k] - ground_z_[static_cast<std::size_t>(bin)];
+                     const float r = std::sqrt(point_x_[k] * point_x_[k] + point_y_[k] * point_y_[k]);
+                     if (h > h_max)
+                     {
+                       ++bs.overhang_points;
+                       continue;
+                     }
+                     farthest[sector] = std::max(farthest[sector], r);
+                     if (h < h_min)
+                     {
+                       ++bs.ground_points;
+                       continue;
+                     }
+                     ++bs.obstacle_points;
+                     first_hit[sector] = std::min(first_hit[sector], r);
+                     const double fc = std::floor((ox + point_x_[k]) * inv_cell);
+                     const double fr = std::floor((oy + point_y_[k]) * inv_cell);
+                     if (fc >= 0.0 && fr >= 0.0 && fc < grid.width && fr < grid.height)
+                     {
+                       point_cell_[k] =
+                           static_cast<std::int32_t>(grid.index(static_cast<int>(fr), static_cast<int>(fc)));
+                     }
                    }
-                   first_hit_[s] = hit;
-                   farthest_return_[s] = far;
-                 }
-               });
-  for (std::size_t k = 0; k < n; ++k)
+                 });
+}
+
+void InverseSensorModel::combineSectorRanges(std::size_t point_blocks, const ParallelBlocks& parallel)
+{
+  const auto sectors = static_cast<std::size_t>(sectors_);
+  forSectors(parallel, sectors,
+             [&](std::size_t s)
+             {
+               float hit = kInf;
+               float far = 0.0F;
+               for (std::size_t b = 0; b < point_blocks; ++b)
+               {
+                 hit = std::min(hit, block_first_hit_[b * sectors + s]);
+                 far = std::max(far, block_farthest_[b * sectors + s]);
+               }
+               first_hit_[s] = hit;
+               farthest_return_[s] = far;
+             });
+}
+
+void InverseSensorModel::markHitCells(const GridGeometry& grid, const ParallelBlocks& parallel)
+{
+  cell_hit_.resize(grid.cellCount());
+  parallelFill(parallel, cell_hit_, std::uint8_t{0});
+  for (std::size_t k = 0; k < point_cell_.size(); ++k)
   {
     if (point_cell_[k] >= 0)
     {
       cell_hit_[static_cast<std::size_t>(point_cell_[k])] = 1;
     }
   }
+}
 
-  auto forRows = [&](const auto& f)
-  {
-    parallel.run(row_blocks,
-                 [&](std::size_t b)
+void InverseSensorModel::dilateHits(const GridGeometry& grid, const ParallelBlocks& parallel)
+{
+  // A 3x3 dilation of the hits, as a horizontal then a vertical pass.
+  const int w = grid.width;
+  const int h = grid.height;
+  near_hit_.resize(grid.cellCount());
+  forRowBlocks(parallel, grid,
+               [&](std::size_t, int r_begin, int r_end)
+               {
+                 for (int row = r_begin; row < r_end; ++row)
                  {
-                   const int r0 = static_cast<int>(b) * kRowBlock;
-                   f(b, r0, std::min(grid.height, r0 + kRowBlock));
-                 });
-  };
-
-  // Cells next to a hit are never free (hit_neighbours_not_free): a 3x3 dilation of the hits,
-  // as a horizontal then a vertical pass.
-  if (config_.hit_neighbours_not_free)
-  {
-    const int w = grid.width;
-    const int h = grid.height;
-    near_hit_.resize(grid.cellCount());
-    forRows(
-        [&](std::size_t, int r_begin, int r_end)
-        {
-          for (int row = r_begin; row < r_end; ++row)
-          {
-            const std::uint8_t* in = cell_hit_.data() + grid.index(row, 0);
-            std::uint8_t* out = near_hit_.data() + grid.index(row, 0);
-            for (int col = 0; col < w; ++col)
-            {
-              out[col] = static_cast<std::uint8_t>(in[col] | (col > 0 ? in[col - 1] : 0) |
-                                                   (col + 1 < w ? in[col + 1] : 0));
-            }
-          }
-        });
-    constexpr int kColumnBlock = 64;
-    parallel.run(blockCount(static_cast<std::size_t>(w), kColumnBlock),
-                 [&](std::size_t b)
-                 {
-                   const int c0 = static_cast<int>(b) * kColumnBlock;
-                   const int c1 = std::min(w, c0 + kColumnBlock);
-                   for (int col = c0; col < c1; ++col)
+                   const std::uint8_t* in = cell_hit_.data() + grid.index(row, 0);
+                   std::uint8_t* out = near_hit_.data() + grid.index(row, 0);
+                   for (int col = 0; col < w; ++col)
                    {
-                     std::uint8_t above = 0;
-                     for (int row = 0; row < h; ++row)
-                     {
-                       const std::size_t idx = grid.index(row, col);
-                       const std::uint8_t here = near_hit_[idx];
-                       const std::uint8_t below =
-                           row + 1 < h ? near_hit_[idx + static_cast<std::size_t>(w)] : 0;
-                       near_hit_[idx] = static_cast<std::uint8_t>(here | above | below);
-                       above = here;
-                     }
+                     out[col] = static_cast<std::uint8_t>(in[col] | (col > 0 ? in[col - 1] : 0) |
+                                                          (col + 1 < w ? in[col + 1] : 0));
                    }
-                 });
-  }
-  const bool protect = config_.hit_neighbours_not_free;
+                 }
+               });
+  parallel.run(blockCount(static_cast<std::size_t>(w), kColumnBlock),
+               [&](std::size_t b)
+               {
+                 const int c0 = static_cast<int>(b) * kColumnBlock;
+                 const int c1 = std::min(w, c0 + kColumnBlock);
+                 for (int col = c0; col < c1; ++col)
+                 {
+                   std::uint8_t above = 0;
+                   for (int row = 0; row < h; ++row)
+                   {
+                     const std::size_t idx = grid.index(row, col);
+                     const std::uint8_t here = near_hit_[idx];
+                     const std::uint8_t below =
+                         row + 1 < h ? near_hit_[idx + static_cast<std::size_t>(w)] : 0;
+                     near_hit_[idx] = static_cast<std::uint8_t>(here | above | below);
+                     above = here;
+                   }
+                 }
+               });
+}
 
-  // Polar ray casting per cell centre (the "lookup" of a cell is its sector and range from
-  // the sensor, computed with the same fastAtan2 as the points):
+void InverseSensorModel::castRays(const GridGeometry& grid, double ox, double oy,
+                                  std::vector<float>& occupancy, const ParallelBlocks& parallel)
+{
+  // The "lookup" of a cell is its sector and range from the sensor, computed with the same
+  // fastAtan2 as the points:
   //   hit range h, sigma s, g(d) = exp(-d^2 / (2 s^2)) (0 beyond 3 s):
   //   r <  h : p = p_free + (p_occ - p_free) g(r - h)
   //   r >= h : p = 0.5 + (p_occ - 0.5) g(r - h)
   //   no hit : p = p_free up to the farthest return, 0.5 beyond
   //   cells holding obstacle points: p = p_occ.
+  occupancy.resize(grid.cellCount());
+  const bool protect = config_.hit_neighbours_not_free;
   const float p_occ = static_cast<float>(config_.p_occupied);
   const float p_fr = static_cast<float>(config_.p_free);
   const float sigma = static_cast<float>(config_.range_sigma);
@@ -403,51 +470,49 @@ InverseSensorModelStats InverseSensorModel::compute(const PointCloudView& cloud,
   const float cell = static_cast<float>(grid.resolution);
   const float min_r = static_cast<float>(config_.min_range);
   const float max_r = static_cast<float>(config_.max_range);
-  forRows(
-      [&](std::size_t blk, int r_begin, int r_end)
-      {
-        InverseSensorModelStats& bs = block_stats_[blk];
-        for (int row = r_begin; row < r_end; ++row)
-        {
-          const float dy = static_cast<float>((row + 0.5) * grid.resolution - oy);
-          const std::size_t base = grid.index(row, 0);
-          for (int col = 0; col < grid.width; ++col)
-          {
-            const std::size_t idx = base + static_cast<std::size_t>(col);
-            float p = 0.5F;
-            if (cell_hit_[idx])
-            {
-              occupancy[idx] = p_occ;
-              ++bs.occupied_cells;
-              continue;
-            }
-            const float dx = (static_cast<float>(col) + 0.5F) * cell - static_cast<float>(ox);
-            const float r = std::sqrt(dx * dx + dy * dy);
-            if (r >= min_r && r <= max_r)
-            {
-              const auto sector = static_cast<std::size_t>(sectorOf(dx, dy));
-              const float hit = first_hit_[sector];
-              if (hit < kInf)
-              {
-                const float d = r - hit;
-                const float g = std::fabs(d) < band ? std::exp(-d * d * inv_two_s2) : 0.0F;
-                p = d < 0.0F ? p_fr + (p_occ - p_fr) * g : 0.5F + (p_occ - 0.5F) * g;
-              }
-              else if (r <= farthest_return_[sector])
-              {
-                p = p_fr;
-              }
-              if (protect && near_hit_[idx] && p < 0.5F)
-              {
-                p = 0.5F;
-              }
-            }
-            occupancy[idx] = p;
-          }
-        }
-      });
-  sumStats(row_blocks);
-  return stats;
+  forRowBlocks(parallel, grid,
+               [&](std::size_t blk, int r_begin, int r_end)
+               {
+                 InverseSensorModelStats& bs = block_stats_[blk];
+                 for (int row = r_begin; row < r_end; ++row)
+                 {
+                   const float dy = static_cast<float>((row + 0.5) * grid.resolution - oy);
+                   const std::size_t base = grid.index(row, 0);
+                   for (int col = 0; col < grid.width; ++col)
+                   {
+                     const std::size_t idx = base + static_cast<std::size_t>(col);
+                     float p = 0.5F;
+                     if (cell_hit_[idx])
+                     {
+                       occupancy[idx] = p_occ;
+                       ++bs.occupied_cells;
+                       continue;
+                     }
+                     const float dx = (static_cast<float>(col) + 0.5F) * cell - static_cast<float>(ox);
+                     const float r = std::sqrt(dx * dx + dy * dy);
+                     if (r >= min_r && r <= max_r)
+                     {
+                       const auto sector = static_cast<std::size_t>(sectorOf(dx, dy));
+                       const float hit = first_hit_[sector];
+                       if (hit < kInf)
+                       {
+                         const float d = r - hit;
+                         const float g = std::fabs(d) < band ? std::exp(-d * d * inv_two_s2) : 0.0F;
+                         p = d < 0.0F ? p_fr + (p_occ - p_fr) * g : 0.5F + (p_occ - 0.5F) * g;
+                       }
+                       else if (r <= farthest_return_[sector])
+                       {
+                         p = p_fr;
+                       }
+                       if (protect && near_hit_[idx] && p < 0.5F)
+                       {
+                         p = 0.5F;
+                       }
+                     }
+                     occupancy[idx] = p;
+                   }
+                 }
+               });
 }
 
 }  // namespace grid_vision_fusion

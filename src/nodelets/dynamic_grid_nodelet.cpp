@@ -18,8 +18,8 @@
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
-#include "grid_vision_fusion/ros/grid_stage.h"
-#include "grid_vision_fusion/ros/tf_wait_queue.h"
+#include "grid_vision_fusion/ros_stages/grid_stage.h"
+#include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
 {

@@ -25,8 +25,8 @@
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
-#include "grid_vision_fusion/ros/fusion_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
+#include "grid_vision_fusion/ros_stages/fusion_stage.h"
 
 namespace grid_vision_fusion
 {

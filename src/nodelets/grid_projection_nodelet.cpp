@@ -28,11 +28,11 @@
 #include "grid_vision_fusion/ProjectedGrid.h"
 #include "grid_vision_fusion/fusion/overlay.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
-#include "grid_vision_fusion/ros/grid_for_image.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
-#include "grid_vision_fusion/ros/projection_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
-#include "grid_vision_fusion/ros/tf_wait_queue.h"
+#include "grid_vision_fusion/ros_stages/projection_stage.h"
+#include "grid_vision_fusion/ros_sync/grid_for_image.h"
+#include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
 {

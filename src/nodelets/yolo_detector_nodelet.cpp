@@ -22,7 +22,7 @@
 #include "grid_vision_fusion/YoloDetectorReconfigureConfig.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
-#include "grid_vision_fusion/ros/detector_stage.h"
+#include "grid_vision_fusion/ros_stages/detector_stage.h"
 
 namespace grid_vision_fusion
 {

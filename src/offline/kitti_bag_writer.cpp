@@ -418,6 +418,20 @@ sensor_msgs::NavSatFix oxtsToNavSatFix(const OxtsRecord& record, const ros::Time
   return fix;
 }
 
+Eigen::Isometry3d poseBefore(const Eigen::Isometry3d& pose, const OxtsRecord& record, double dt)
+{
+  const Eigen::Vector3d velocity(record.vf, record.vl, record.vu);
+  const Eigen::Vector3d rate(record.wf, record.wl, record.wu);
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();  // the motion over dt, in the body frame
+  const double angle = rate.norm() * dt;
+  if (angle > 0.0)
+  {
+    step.linear() = Eigen::AngleAxisd(angle, rate.normalized()).toRotationMatrix();
+  }
+  step.translation() = velocity * dt;
+  return pose * step.inverse();
+}
+
 geometry_msgs::TwistStamped oxtsToTwist(const OxtsRecord& record, const ros::Time& stamp)
 {
   geometry_msgs::TwistStamped twist;
@@ -525,6 +539,14 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
     tf2_msgs::TFMessage static_tf;
     static_tf.transforms = kittiStaticTransforms(calibration, options.cameras, start);
     write("/tf_static", start, static_tf, latchedConnectionHeader<tf2_msgs::TFMessage>());
+    const double lead = (toRosTime(oxts_stamps[static_cast<std::size_t>(first)]) - start).toSec();
+    if (lead > 0.0 && lead <= kMaxPoseExtrapolationS)
+    {
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(
+          toTransformMsg(poseBefore(poses.front(), records.front(), lead), kWorldFrame, kBaseFrame, start));
+      write("/tf", start, tf);
+    }
 
     for (int frame = first; frame <= last; ++frame)
     {

@@ -124,8 +124,36 @@ ProjectedPointsView ProjectedCells::view() const
   return pointsViewOf(*this);
 }
 
-ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,
-                           const ProjectionGeometry& geometry, const GridProjectionConfig& config)
+namespace
+{
+/// The camera and the columns of one projection.
+struct ColumnGeometry
+{
+  Eigen::Matrix<double, 3, 4> m;  ///< grid frame point → homogeneous pixel
+  double ground_z = 0.0;          ///< z of the cells' ground points in the grid frame [m]
+  int points_per_cell = 1;
+  double column_step = 0.0;  ///< height between the points of a column [m]
+  double width = 0.0;        ///< image width [px]
+  double height = 0.0;       ///< image height [px]
+};
+
+/// A cell that passed the occupancy threshold: its masses, state, velocity and where it is at the
+/// image stamp.
+struct SelectedCell
+{
+  std::size_t index = 0;
+  float p_static = 0.0F;
+  float p_dynamic = 0.0F;
+  CellState state = CellState::kStatic;
+  float vx = 0.0F;
+  float vy = 0.0F;
+  double x = 0.0;  ///< ground point in the grid frame [m]
+  double y = 0.0;
+};
+
+/// @throws std::invalid_argument when the grid, the config or the geometry is invalid.
+void validateProjection(const GridCellsView& grid, const ProjectionGeometry& geometry,
+                        const GridProjectionConfig& config)
 {
   grid.validate();
   config.validate();
@@ -134,129 +162,182 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
           "ground_z must be finite, got " + std::to_string(geometry.ground_z));
   require(std::isfinite(geometry.time_offset),
           "time offset between image and grid must be finite, got " + std::to_string(geometry.time_offset));
+}
 
-  // Grid frame point → homogeneous pixel in one 3×4 matrix.
-  const Eigen::Matrix<double, 3, 4> m = camera.projection() * geometry.camera_from_grid.matrix();
-  const double dt = config.predict_to_image_stamp ? geometry.time_offset : 0.0;
-  const int points_per_cell = config.column_mode ? config.column_points : 1;
-  const double column_step = config.column_mode ? config.column_height / (config.column_points - 1) : 0.0;
-  const double threshold = config.occupied_threshold;
-  const double width = camera.width();
-  const double height = camera.height();
-
-  ProjectedCells out;
-  // Reserve for every candidate cell first: one cheap pass instead of repeated reallocations.
+/// The cells at or above `threshold` in P(S) or P(D).
+std::size_t candidateCells(const GridCellsView& grid, double threshold)
+{
   std::size_t candidates = 0;
   for (std::size_t i = 0; i < grid.size(); ++i)
   {
     candidates += (grid.p_static[i] >= threshold || grid.p_dynamic[i] >= threshold) ? 1 : 0;
   }
-  out.reserve(candidates * static_cast<std::size_t>(points_per_cell));
+  return candidates;
+}
+
+/// The state and velocity of `cell` (masses set) and its ground point (x, y) moved to the image
+/// stamp (dt after the grid) when DYNAMIC; false when a DYNAMIC cell has no finite velocity.
+bool moveToImageStamp(const GridCellsView& grid, const GridProjectionConfig& config, double dt, double x,
+                      double y, SelectedCell& cell)
+{
+  const std::size_t i = cell.index;
+  const float ps = cell.p_static;
+  const float pd = cell.p_dynamic;
+  float cvx = grid.vx[i];
+  float cvy = grid.vy[i];
+  // A cell dynamic by its masses needs a finite velocity (else it is invalid, below); then the
+  // velocity test may still make it static.
+  CellState state = cellState(ps, pd, config);
+  if (state == CellState::kDynamic && std::isfinite(cvx) && std::isfinite(cvy))
+  {
+    const bool variances = grid.v_var_x != nullptr && grid.v_var_y != nullptr;
+    state = cellState(ps, pd, cvx, cvy, variances ? grid.v_var_x[i] : -1.0F,
+                      variances ? grid.v_var_y[i] : -1.0F, config);
+  }
+  if (state == CellState::kDynamic)
+  {
+    if (!std::isfinite(cvx) || !std::isfinite(cvy))
+    {
+      return false;
+    }
+    x += cvx * dt;
+    y += cvy * dt;
+  }
+  else if (!std::isfinite(cvx) || !std::isfinite(cvy))
+  {
+    cvx = 0.F;
+    cvy = 0.F;
+  }
+  cell.state = state;
+  cell.vx = cvx;
+  cell.vy = cvy;
+  cell.x = x;
+  cell.y = y;
+  return true;
+}
+
+/// Appends the point (pu, pv) at `depth` of `cell` to `out`.
+void appendPoint(const GridCellsView& grid, const SelectedCell& cell, double pu, double pv, double depth,
+                 ProjectedCells& out)
+{
+  const std::size_t i = cell.index;
+  out.u.push_back(static_cast<float>(pu));
+  out.v.push_back(static_cast<float>(pv));
+  out.depth.push_back(static_cast<float>(depth));
+  out.x.push_back(static_cast<float>(cell.x));
+  out.y.push_back(static_cast<float>(cell.y));
+  out.vx.push_back(cell.vx);
+  out.vy.push_back(cell.vy);
+  out.p_static.push_back(cell.p_static);
+  out.p_dynamic.push_back(cell.p_dynamic);
+  out.state.push_back(static_cast<std::uint8_t>(cell.state));
+  if (grid.scans_since_hit)
+  {
+    out.scans_since_hit.push_back(grid.scans_since_hit[i]);
+  }
+  if (grid.v_var_x && grid.v_var_y)
+  {
+    out.v_var_x.push_back(grid.v_var_x[i]);
+    out.v_var_y.push_back(grid.v_var_y[i]);
+  }
+}
+
+/// Projects the column of `cell` (its ground point, and the points above it in column mode) into
+/// the image; the points behind the camera or outside the image are counted, not kept.
+void projectColumn(const GridCellsView& grid, const SelectedCell& cell, const ColumnGeometry& column,
+                   const GridProjectionConfig& config, ProjectedCells& out)
+{
+  // The column is linear in z: the ground point plus k steps along the z column of m.
+  const Eigen::Matrix<double, 3, 4>& m = column.m;
+  const double x = cell.x;
+  const double y = cell.y;
+  const double hu0 = m(0, 0) * x + m(0, 1) * y + m(0, 2) * column.ground_z + m(0, 3);
+  const double hv0 = m(1, 0) * x + m(1, 1) * y + m(1, 2) * column.ground_z + m(1, 3);
+  const double hw0 = m(2, 0) * x + m(2, 1) * y + m(2, 2) * column.ground_z + m(2, 3);
+  for (int k = 0; k < column.points_per_cell; ++k)
+  {
+    const double dz = k * column.column_step;
+    const double hu = hu0 + m(0, 2) * dz;
+    const double hv = hv0 + m(1, 2) * dz;
+    const double hw = hw0 + m(2, 2) * dz;
+    if (!(hw >= config.min_depth))
+    {
+      ++out.points_behind;
+      continue;
+    }
+    double pu = hu / hw;
+    double pv = hv / hw;
+    double depth = hw;
+    if (k == 0 && config.near_cells_at_bottom && pv >= column.height)
+    {
+      // The column's point on the bottom row v_b: (hv0 + a dz) / (hw0 + c dz) = v_b.
+      const double v_bottom = column.height - 0.5;
+      const double a = m(1, 2);
+      const double c = m(2, 2);
+      const double denominator = a - v_bottom * c;
+      const double lift = denominator != 0.0 ? (v_bottom * hw0 - hv0) / denominator : -1.0;
+      if (lift >= 0.0 && lift <= config.column_height && hw0 + c * lift >= config.min_depth)
+      {
+        depth = hw0 + c * lift;
+        pu = (hu0 + m(0, 2) * lift) / depth;
+        pv = v_bottom;
+      }
+    }
+    if (!(pu >= 0.0 && pv >= 0.0 && pu < column.width && pv < column.height))
+    {
+      ++out.points_outside;
+      continue;
+    }
+    appendPoint(grid, cell, pu, pv, depth, out);
+  }
+}
+}  // namespace
+
+ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camera,
+                           const ProjectionGeometry& geometry, const GridProjectionConfig& config)
+{
+  validateProjection(grid, geometry, config);
+  // Grid frame point → homogeneous pixel in one 3×4 matrix.
+  const Eigen::Matrix<double, 3, 4> m = camera.projection() * geometry.camera_from_grid.matrix();
+  ColumnGeometry column;
+  column.m = m;
+  column.ground_z = geometry.ground_z;
+  column.points_per_cell = config.column_mode ? config.column_points : 1;
+  column.column_step = config.column_mode ? config.column_height / (config.column_points - 1) : 0.0;
+  column.width = camera.width();
+  column.height = camera.height();
+  const double dt = config.predict_to_image_stamp ? geometry.time_offset : 0.0;
+  const double threshold = config.occupied_threshold;
+
+  ProjectedCells out;
+  // Reserve for every candidate cell first: one cheap pass instead of repeated reallocations.
+  out.reserve(candidateCells(grid, threshold) * static_cast<std::size_t>(column.points_per_cell));
   for (std::uint32_t row = 0; row < grid.height; ++row)
   {
     const double cell_y = grid.origin_y + (row + 0.5) * grid.resolution;
     const std::size_t row_start = static_cast<std::size_t>(row) * grid.width;
     for (std::uint32_t col = 0; col < grid.width; ++col)
     {
-      const std::size_t i = row_start + col;
-      const float ps = grid.p_static[i];
-      const float pd = grid.p_dynamic[i];
-      if (!std::isfinite(ps) || !std::isfinite(pd))
+      SelectedCell cell;
+      cell.index = row_start + col;
+      cell.p_static = grid.p_static[cell.index];
+      cell.p_dynamic = grid.p_dynamic[cell.index];
+      if (!std::isfinite(cell.p_static) || !std::isfinite(cell.p_dynamic))
       {
         ++out.cells_invalid;
         continue;
       }
-      if (ps < threshold && pd < threshold)
+      if (cell.p_static < threshold && cell.p_dynamic < threshold)
       {
         continue;
       }
       ++out.cells_selected;
-      float cvx = grid.vx[i];
-      float cvy = grid.vy[i];
-      // A cell dynamic by its masses needs a finite velocity (else it is invalid, below); then the
-      // velocity test may still make it static.
-      CellState state = cellState(ps, pd, config);
-      if (state == CellState::kDynamic && std::isfinite(cvx) && std::isfinite(cvy))
+      if (!moveToImageStamp(grid, config, dt, grid.origin_x + (col + 0.5) * grid.resolution, cell_y, cell))
       {
-        const bool variances = grid.v_var_x != nullptr && grid.v_var_y != nullptr;
-        state = cellState(ps, pd, cvx, cvy, variances ? grid.v_var_x[i] : -1.0F,
-                          variances ? grid.v_var_y[i] : -1.0F, config);
+        ++out.cells_invalid;
+        continue;
       }
-      double x = grid.origin_x + (col + 0.5) * grid.resolution;
-      double y = cell_y;
-      if (state == CellState::kDynamic)
-      {
-        if (!std::isfinite(cvx) || !std::isfinite(cvy))
-        {
-          ++out.cells_invalid;
-          continue;
-        }
-        x += cvx * dt;
-        y += cvy * dt;
-      }
-      else if (!std::isfinite(cvx) || !std::isfinite(cvy))
-      {
-        cvx = 0.F;
-        cvy = 0.F;
-      }
-      // The column is linear in z: the ground point plus k steps along the z column of m.
-      const double hu0 = m(0, 0) * x + m(0, 1) * y + m(0, 2) * geometry.ground_z + m(0, 3);
-      const double hv0 = m(1, 0) * x + m(1, 1) * y + m(1, 2) * geometry.ground_z + m(1, 3);
-      const double hw0 = m(2, 0) * x + m(2, 1) * y + m(2, 2) * geometry.ground_z + m(2, 3);
-      for (int k = 0; k < points_per_cell; ++k)
-      {
-        const double dz = k * column_step;
-        const double hu = hu0 + m(0, 2) * dz;
-        const double hv = hv0 + m(1, 2) * dz;
-        const double hw = hw0 + m(2, 2) * dz;
-        if (!(hw >= config.min_depth))
-        {
-          ++out.points_behind;
-          continue;
-        }
-        double pu = hu / hw;
-        double pv = hv / hw;
-        double depth = hw;
-        if (k == 0 && config.near_cells_at_bottom && pv >= height)
-        {
-          // The column's point on the bottom row v_b: (hv0 + a dz) / (hw0 + c dz) = v_b.
-          const double v_bottom = height - 0.5;
-          const double a = m(1, 2);
-          const double c = m(2, 2);
-          const double denominator = a - v_bottom * c;
-          const double lift = denominator != 0.0 ? (v_bottom * hw0 - hv0) / denominator : -1.0;
-          if (lift >= 0.0 && lift <= config.column_height && hw0 + c * lift >= config.min_depth)
-          {
-            depth = hw0 + c * lift;
-            pu = (hu0 + m(0, 2) * lift) / depth;
-            pv = v_bottom;
-          }
-        }
-        if (!(pu >= 0.0 && pv >= 0.0 && pu < width && pv < height))
-        {
-          ++out.points_outside;
-          continue;
-        }
-        out.u.push_back(static_cast<float>(pu));
-        out.v.push_back(static_cast<float>(pv));
-        out.depth.push_back(static_cast<float>(depth));
-        out.x.push_back(static_cast<float>(x));
-        out.y.push_back(static_cast<float>(y));
-        out.vx.push_back(cvx);
-        out.vy.push_back(cvy);
-        out.p_static.push_back(ps);
-        out.p_dynamic.push_back(pd);
-        out.state.push_back(static_cast<std::uint8_t>(state));
-        if (grid.scans_since_hit)
-        {
-          out.scans_since_hit.push_back(grid.scans_since_hit[i]);
-        }
-        if (grid.v_var_x && grid.v_var_y)
-        {
-          out.v_var_x.push_back(grid.v_var_x[i]);
-          out.v_var_y.push_back(grid.v_var_y[i]);
-        }
-      }
+      projectColumn(grid, cell, column, config, out);
     }
   }
   return out;

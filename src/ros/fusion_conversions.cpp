@@ -142,7 +142,9 @@ visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray&
   for (const auto& object : objects.objects)
   {
     const auto motion = static_cast<Motion>(object.motion);
-    const std_msgs::ColorRGBA color = toColor(motion);
+    const bool tentative = object.track_state == DetectedObject::TRACK_TENTATIVE;
+    // A new (tentative) track is drawn grey, as an object without a verdict.
+    const std_msgs::ColorRGBA color = toColor(tentative ? Motion::kUnknown : motion);
 
     auto body = baseMarker(objects, "objects", object.id, visualization_msgs::Marker::CYLINDER);
     body.pose.position = object.position;
@@ -176,6 +178,10 @@ visualization_msgs::MarkerArray::Ptr objectsToMarkers(const DetectedObjectArray&
     label.color.a = 1.0F;
     label.text = with_ids ? trackLabel(object.id, motion, object.label, speed)
                           : objectLabel(motion, object.label, speed);
+    if (tentative)
+    {
+      label.text += " (new track)";
+    }
     markers->markers.push_back(label);
   }
   return markers;

@@ -486,7 +486,7 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
     {
       const fs::path path = oxts_dir / indexName(frame, ".txt");
       std::ofstream out = openForWriting(path);
-      writeOxtsLine(out, oxtsAt(scenario.ego, t, imu_height, options));
+      writeOxtsLine(out, oxtsAt(scenario.ego, t + scenario.oxts_delay_s, imu_height, options));
       closeChecked(out, path);
     }
     const KittiStamp stamp = addSeconds(start, t);
@@ -494,7 +494,7 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
     velo_stamps << formatStamp(stamp) << '\n';
     velo_start << formatStamp(addSeconds(start, t - kScanHalfPeriodS)) << '\n';
     velo_end << formatStamp(addSeconds(start, t + kScanHalfPeriodS)) << '\n';
-    oxts_stamps << formatStamp(stamp) << '\n';
+    oxts_stamps << formatStamp(addSeconds(start, t + scenario.oxts_delay_s)) << '\n';
     if (progress)
     {
       progress(frame + 1, frames);

@@ -160,6 +160,11 @@ void SyntheticScenario::validate() const
   {
     throw std::invalid_argument("duration x frame_rate gives no frame");
   }
+  if (!(oxts_delay_s >= 0.0 && oxts_delay_s < 0.5 / frame_rate_hz))
+  {
+    throw std::invalid_argument("oxts_delay must be in [0, half a frame), got " +
+                                std::to_string(oxts_delay_s) + " s");
+  }
   lidar.validate();
 }
 
@@ -200,6 +205,7 @@ SyntheticScenario parseScenario(const std::string& yaml, const std::string& path
   getOptional(root, "seed", path, scenario.seed);
   getOptional(root, "duration", path, scenario.duration_s);
   getOptional(root, "frame_rate", path, scenario.frame_rate_hz);
+  getOptional(root, "oxts_delay", path, scenario.oxts_delay_s);
   if (const YAML::Node road = root["road"])
   {
     getOptional(road, "center_y", path + ": road", scenario.road.center_y);

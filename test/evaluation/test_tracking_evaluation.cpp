@@ -2,6 +2,7 @@
 // hand-made sequences; every figure is worked out in the comment next to it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
 
 #include "grid_vision_fusion/evaluation/evaluation.h"
@@ -106,6 +107,57 @@ TEST(TrackingEvaluation, PerFrameIndicesSwitchAndTruthChangesAreNoFlicker)
   EXPECT_EQ(m.motion_changes, 0U);
   EXPECT_EQ(m.motion_flickers, 0U);
   EXPECT_DOUBLE_EQ(m.mota, 1.0 - 4.0 / 6.0);
+}
+
+TEST(TrackingEvaluation, TimeToTheFirstDynamicVerdict)
+{
+  // A car (tracklet 3) standing in frames 0-1, moving at 0.6 m/s in frame 2, at 2 m/s from frame
+  // 3 on: reported static until frame 5, dynamic from frame 6: 0.3 s after its first match at
+  // 1 m/s or more. A cyclist (tracklet 4) at 5 m/s from frame 0, never reported dynamic. A parked
+  // van (tracklet 5): no latency.
+  std::vector<EvalObject> truth, detections;
+  for (int f = 0; f < 10; ++f)
+  {
+    EvalObject car = object(f, 3, f < 2 ? Motion::kStatic : Motion::kDynamic);
+    car.has_state = true;
+    car.vx = f < 2 ? 0.0 : f == 2 ? 0.6 : 2.0;
+    truth.push_back(car);
+    detections.push_back(object(f, 1, f < 6 ? Motion::kStatic : Motion::kDynamic));
+    EvalObject cyclist = object(f, 4, Motion::kDynamic, kElsewhere, "cyclist");
+    cyclist.has_state = true;
+    cyclist.vy = 5.0;
+    truth.push_back(cyclist);
+    detections.push_back(object(f, 2, Motion::kStatic, kElsewhere, "cyclist"));
+    EvalObject van = object(f, 5, Motion::kStatic, BoundingBox{700.F, 100.F, 799.F, 199.F}, "van");
+    van.has_state = true;
+    truth.push_back(van);
+    detections.push_back(object(f, 3, Motion::kStatic, van.box, "van"));
+  }
+  const TrackingMetrics m = evaluateTracking(truth, detections, TrackingEvaluationConfig{});
+  ASSERT_EQ(m.dynamic_latency.size(), 2U);
+  EXPECT_EQ(m.dynamic_latency[0].label, "car");
+  EXPECT_EQ(m.dynamic_latency[0].track_id, 3);
+  EXPECT_NEAR(m.dynamic_latency[0].latency_s, 0.3, 1e-9);
+  EXPECT_EQ(m.dynamic_latency[1].label, "cyclist");
+  EXPECT_LT(m.dynamic_latency[1].latency_s, 0.0) << "never reported dynamic";
+
+  const LatencyStats all = latencyStats(m.dynamic_latency);
+  EXPECT_EQ(all.count, 2U);
+  EXPECT_EQ(all.never, 1U);
+  EXPECT_NEAR(all.median_s, 0.3, 1e-9);
+  EXPECT_TRUE(std::isinf(all.p90_s));
+  EXPECT_TRUE(std::isinf(all.worst_s));
+  const LatencyStats cars = latencyStats(m.dynamic_latency, "car");
+  EXPECT_EQ(cars.count, 1U);
+  EXPECT_NEAR(cars.p90_s, 0.3, 1e-9);
+  EXPECT_NEAR(cars.worst_s, 0.3, 1e-9);
+  EXPECT_EQ(latencyStats(m.dynamic_latency, "van").count, 0U);
+
+  TrackingEvaluationConfig slow;
+  slow.latency_speed_mps = 0.5;  // the car counts from frame 2: 0.4 s
+  EXPECT_NEAR(evaluateTracking(truth, detections, slow).dynamic_latency.at(0).latency_s, 0.4, 1e-9);
+  slow.latency_speed_mps = 0.0;
+  EXPECT_THROW(slow.validate(), std::invalid_argument);
 }
 
 TEST(TrackingEvaluation, LabelsAndRangeAndConfig)

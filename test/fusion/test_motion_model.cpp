@@ -222,6 +222,28 @@ TEST(MotionModel, ACentreCutAlongTheLengthSaysNothingAlongIt)
   }
 }
 
+TEST(MotionModel, ARestartKeepsTheMotion)
+{
+  // A car at 5 m/s whose centre estimate jumps 3 m ahead (its visible part changed): restarted
+  // there, it keeps its velocity and P(dynamic), and goes on being dynamic.
+  MotionModel model;
+  model.start(Eigen::Vector2d(0.0, 0.0), 0.5);
+  for (int k = 1; k <= 20; ++k)
+  {
+    model.predict(kDt);
+    model.update(Eigen::Vector2d(0.5 * k, 0.0));
+  }
+  const double before = model.modeProbability();
+  ASSERT_GT(before, 0.9);
+  model.restartAt(Eigen::Vector2d(13.0, 0.0));
+  EXPECT_DOUBLE_EQ(model.modeProbability(), before);
+  EXPECT_NEAR(model.movingVelocity().x(), 5.0, 0.3);
+  EXPECT_NEAR(model.state()(0), 13.0, 1e-9);
+  model.predict(kDt);
+  model.update(Eigen::Vector2d(13.5, 0.0));
+  EXPECT_GT(model.modeProbability(), 0.9);
+}
+
 TEST(MotionModel, TheCombinedStateWeighsTheModels)
 {
   MotionModel model;

@@ -51,6 +51,26 @@ TEST(Overlay, BoxesColouredByMotionAndPointsByState)
   EXPECT_EQ(at(image, 140, 20), cv::Vec3b(0, 0, 0));
 }
 
+TEST(Overlay, ANewTrackIsDrawnGrey)
+{
+  cv::Mat image(200, 300, CV_8UC3, cv::Scalar(0, 0, 0));
+  Detection moving;
+  moving.label = "car";
+  moving.box = BoundingBox{20.F, 60.F, 120.F, 140.F};
+  ProjectedPoints points;
+  points.add(70.F, 150.F, 10.F, 1.F, 5.F, 0.F, CellState::kDynamic);
+  const FusionConfig config;
+  FusionResult result = fuse({moving}, points.view(), config);
+  ASSERT_EQ(result.objects.size(), 1U);
+  result.tracked = true;
+  result.objects[0].track_state = TrackState::kTentative;
+  drawFusionOverlay(image, {moving}, result, points.view(), config);
+  const cv::Vec3b edge = at(image, 20, 100);
+  EXPECT_EQ(edge[0], edge[1]);
+  EXPECT_EQ(edge[1], edge[2]) << "grey, not the dynamic green";
+  EXPECT_GT(edge[0], 0);
+}
+
 TEST(Overlay, RejectsNonBgrImages)
 {
   cv::Mat mono(10, 10, CV_8UC1);

@@ -63,7 +63,7 @@ TEST(FuzzCorpus, EveryHarnessOfFuzzIsRun)
     run.insert(harness.name);
   }
   std::size_t found = 0;
-  for (const auto& entry : fs::directory_iterator(fs::path(GVF_SOURCE_DIR) / "fuzz"))
+  for (const auto& entry : fs::recursive_directory_iterator(fs::path(GVF_SOURCE_DIR) / "fuzz"))
   {
     const std::string name = entry.path().filename().string();
     if (name.rfind("fuzz_", 0) == 0 && entry.path().extension() == ".cpp")

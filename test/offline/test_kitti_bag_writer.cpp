@@ -216,7 +216,7 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
   opts.progress = [&progress](std::size_t done, std::size_t total) { progress.emplace_back(done, total); };
   const KittiBagSummary summary = convertKittiDrive(opts);
   EXPECT_EQ(summary.frames, 5U);
-  EXPECT_EQ(summary.messages, 1U + 5U * 7U);
+  EXPECT_EQ(summary.messages, 2U + 5U * 7U);  // tf_static, the first frame's lead pose, 7 per frame
   ASSERT_EQ(progress.size(), 5U);
   using Progress = std::pair<std::size_t, std::size_t>;
   EXPECT_EQ(progress.front(), Progress(1, 5));
@@ -224,7 +224,7 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
 
   const auto bag = readBag();
   const std::map<std::string, std::size_t> expected_counts = {{"/tf_static", 1U},
-                                                              {"/tf", 5U},
+                                                              {"/tf", 6U},
                                                               {"/kitti/oxts/imu", 5U},
                                                               {"/kitti/oxts/gps/fix", 5U},
                                                               {"/kitti/oxts/gps/vel", 5U},
@@ -246,12 +246,12 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
   for (int i = 0; i < kFrames; ++i)
   {
     const auto k = static_cast<std::size_t>(i);
-    const auto tf = bag.at("/tf")[k].instantiate<tf2_msgs::TFMessage>();
+    const auto tf = bag.at("/tf")[k + 1].instantiate<tf2_msgs::TFMessage>();  // after the lead pose
     ASSERT_EQ(tf->transforms.size(), 1U);
     EXPECT_EQ(tf->transforms[0].header.stamp, oxts[k]);
     EXPECT_EQ(tf->transforms[0].header.frame_id, "world");
     EXPECT_EQ(tf->transforms[0].child_frame_id, "base_link");
-    EXPECT_EQ(bag.at("/tf")[k].getTime(), oxts[k]);
+    EXPECT_EQ(bag.at("/tf")[k + 1].getTime(), oxts[k]);
 
     const auto imu = bag.at("/kitti/oxts/imu")[k].instantiate<sensor_msgs::Imu>();
     EXPECT_EQ(imu->header.stamp, oxts[k]);
@@ -331,11 +331,11 @@ TEST_F(KittiDriveFixture, TfOfFrameOneIsTheOxtsPoseRelativeToFrameZero)
 {
   convertKittiDrive(options());
   const auto bag = readBag();
-  const auto tf0 = bag.at("/tf")[0].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
+  const auto tf0 = bag.at("/tf")[1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
   EXPECT_TRUE(tf2::transformToEigen(tf0).isApprox(Eigen::Isometry3d::Identity(), 1e-12));
 
   const Eigen::Isometry3d pose1 =
-      tf2::transformToEigen(bag.at("/tf")[1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
+      tf2::transformToEigen(bag.at("/tf")[2].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
   // Hand values (KITTI devkit convertOxtsToPose on records 0 and 1 of drive 0001).
   EXPECT_NEAR(pose1.translation().x(), 1.4424816836, 1e-6);
   EXPECT_NEAR(pose1.translation().y(), 0.0124398614, 1e-6);
@@ -348,9 +348,48 @@ TEST_F(KittiDriveFixture, TfOfFrameOneIsTheOxtsPoseRelativeToFrameZero)
   {
     const auto k = static_cast<std::size_t>(i);
     const Eigen::Isometry3d pose =
-        tf2::transformToEigen(bag.at("/tf")[k].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
+        tf2::transformToEigen(bag.at("/tf")[k + 1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
     EXPECT_TRUE(pose.isApprox(poses[k], 1e-9)) << "frame " << i;
   }
+}
+
+TEST_F(KittiDriveFixture, TheFirstFrameGetsAPoseAtItsEarliestSensorStamp)
+{
+  // Drive 0001's first scan is stamped 13.2 ms before its first OXTS record: the first pose is
+  // also written then, moved back along the record's velocity, so that the scan has a pose.
+  convertKittiDrive(options());
+  const auto bag = readBag();
+  const auto velo = rosStamps(kDrive + "/velodyne_points/timestamps.txt");
+  const auto oxts = rosStamps(kDrive + "/oxts/timestamps.txt");
+  const double lead = (oxts[0] - velo[0]).toSec();
+  ASSERT_GT(lead, 0.013);
+  ASSERT_LT(lead, 0.014);
+  const auto first = bag.at("/tf")[0].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
+  EXPECT_EQ(first.header.stamp, velo[0]) << "the earliest sensor stamp of frame 0 is the scan's";
+  const OxtsRecord record = readOxtsFolder(drive_ + "/oxts").front();
+  const Eigen::Isometry3d before = tf2::transformToEigen(first);
+  EXPECT_NEAR(before.translation().x(), -record.vf * lead, 1e-3);
+  EXPECT_NEAR(before.translation().y(), -record.vl * lead, 1e-3);
+  EXPECT_TRUE(before.isApprox(poseBefore(Eigen::Isometry3d::Identity(), record, lead), 1e-9));
+}
+
+TEST(PoseBefore, UndoesAConstantTwist)
+{
+  // 10 m/s forward, turning left at 0.5 rad/s: moving 0.1 s on from poseBefore(pose, 0.1) along
+  // the same twist lands on the pose again.
+  OxtsRecord record;
+  record.vf = 10.0;
+  record.vl = 0.2;
+  record.wu = 0.5;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translate(Eigen::Vector3d(3.0, -1.0, 0.2));
+  pose.rotate(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  const Eigen::Isometry3d before = poseBefore(pose, record, 0.1);
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  step.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  step.translation() = Eigen::Vector3d(1.0, 0.02, 0.0);
+  EXPECT_TRUE((before * step).isApprox(pose, 1e-12));
+  EXPECT_TRUE(poseBefore(pose, OxtsRecord{}, 0.1).isApprox(pose, 1e-12)) << "standing: the same pose";
 }
 
 TEST_F(KittiDriveFixture, StaticTransformChainFollowsTheCalibration)
@@ -497,13 +536,13 @@ TEST_F(KittiDriveFixture, FrameRangeAndCamerasAreOptions)
   opts.cameras = {2, 3, 0};
   EXPECT_EQ(convertKittiDrive(opts).frames, 2U);
   const auto bag = readBag();
-  EXPECT_EQ(bag.at("/tf").size(), 2U);
+  EXPECT_EQ(bag.at("/tf").size(), 3U);  // the lead pose of frame 2, then frames 2 and 3
   EXPECT_EQ(bag.at("/kitti/camera_color_right/image_raw").size(), 2U);
   EXPECT_EQ(bag.at("/kitti/camera_gray_left/image_raw").size(), 2U);
   EXPECT_EQ(bag.count("/kitti/camera_gray_right/image_raw"), 0U);
 
   // The first frame of the range is the origin of world.
-  const auto tf = bag.at("/tf")[0].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
+  const auto tf = bag.at("/tf")[1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
   EXPECT_EQ(tf.header.stamp, rosStamps(kDrive + "/oxts/timestamps.txt")[2]);
   EXPECT_TRUE(tf2::transformToEigen(tf).isApprox(Eigen::Isometry3d::Identity(), 1e-12));
 

@@ -88,6 +88,8 @@ TEST(FusionConversions, ObjectsCarryEveryField)
   object.vx = 3.0;
   object.vy = 4.0;
   object.heading = 0.9272952;
+  object.p_dynamic = 0.875;
+  object.track_state = TrackState::kConfirmed;
   result.objects.push_back(object);
 
   const DetectedObjectArray::Ptr msg = objectsToMsg(detections_msg.header, "world", detections, result);
@@ -101,6 +103,8 @@ TEST(FusionConversions, ObjectsCarryEveryField)
   EXPECT_EQ(o.label, "car");
   EXPECT_FLOAT_EQ(o.score, 0.75F);
   EXPECT_EQ(o.motion, DetectedObject::MOTION_DYNAMIC);
+  EXPECT_FLOAT_EQ(o.p_dynamic, 0.875F);
+  EXPECT_EQ(o.track_state, DetectedObject::TRACK_CONFIRMED);
   EXPECT_EQ(o.static_points, 1U);
   EXPECT_EQ(o.dynamic_points, 2U);
   EXPECT_DOUBLE_EQ(o.position.x, 5.0);
@@ -124,6 +128,13 @@ TEST(FusionConversions, ObjectsCarryEveryField)
   EXPECT_DOUBLE_EQ(markers->markers[2].points[1].x - markers->markers[2].points[0].x, 3.0);
   EXPECT_EQ(markers->markers[3].type, visualization_msgs::Marker::TEXT_VIEW_FACING);
   EXPECT_EQ(markers->markers[3].text, "dynamic car 5.0 m/s");
+
+  // A tentative track: grey, labelled as new.
+  msg->objects[0].track_state = DetectedObject::TRACK_TENTATIVE;
+  const visualization_msgs::MarkerArray::Ptr tentative = objectsToMarkers(*msg, true);
+  ASSERT_EQ(tentative->markers.size(), 4U);
+  EXPECT_EQ(tentative->markers[3].text, "#0 dynamic car 5.0 m/s (new track)");
+  EXPECT_FLOAT_EQ(tentative->markers[1].color.g, tentative->markers[1].color.r) << "grey, not green";
 }
 
 TEST(FusionConversions, StaticObjectHasNoArrow)

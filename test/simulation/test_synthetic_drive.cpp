@@ -120,6 +120,40 @@ TEST(SyntheticDrive, OxtsAndTimestampsReadBack)
   EXPECT_NEAR(records[0].alt - 116.0, 1.73 - velo_above_imu, 1e-6);
 }
 
+TEST(SyntheticDrive, TheOxtsDelayStampsAndSamplesTheRecordsLater)
+{
+  // As on KITTI raw drives: each OXTS record 13 ms after its frame's scan and image, sampled then.
+  SyntheticScenario scenario = smallScenario();
+  scenario.oxts_delay_s = 0.013;
+  SyntheticDriveOptions options;
+  options.output_root = (fs::path(testing::TempDir()) / "synthetic_drive_delay").string();
+  options.calibration_dir = kCalibration;
+  fs::remove_all(options.output_root);
+  const fs::path dir = writeSyntheticDrive(scenario, options).drive_dir;
+  const auto nanoseconds = [](const KittiStamp& s) { return s.sec * 1000000000LL + s.nsec; };
+  const std::vector<KittiStamp> images = readTimestamps((dir / "image_02/timestamps.txt").string());
+  const std::vector<KittiStamp> velo = readTimestamps((dir / "velodyne_points/timestamps.txt").string());
+  const std::vector<KittiStamp> oxts = readTimestamps((dir / "oxts/timestamps.txt").string());
+  ASSERT_EQ(oxts.size(), 3U);
+  for (std::size_t i = 0; i < 3; ++i)
+  {
+    EXPECT_EQ(nanoseconds(oxts[i]) - nanoseconds(images[i]), 13000000LL) << "frame " << i;
+    EXPECT_EQ(nanoseconds(velo[i]), nanoseconds(images[i])) << "frame " << i;
+  }
+  // The ego at 10 m/s: the first record lies 0.13 m further east than without the delay.
+  const OxtsRecord delayed = readOxtsFolder((dir / "oxts").string()).front();
+  const OxtsRecord plain = readOxtsFolder((fs::path(drive().summary.drive_dir) / "oxts").string()).front();
+  const double scale = mercatorScale(plain.lat);
+  const double east = oxtsToMercatorPose(delayed, scale).translation().x() -
+                      oxtsToMercatorPose(plain, scale).translation().x();
+  EXPECT_NEAR(east, 0.13, 1e-3);
+
+  scenario.oxts_delay_s = 0.05;  // half a frame at 10 Hz
+  EXPECT_THROW(scenario.validate(), std::invalid_argument);
+  scenario.oxts_delay_s = -0.001;
+  EXPECT_THROW(scenario.validate(), std::invalid_argument);
+}
+
 TEST(SyntheticDrive, TrackletsAreTheScenarioInTheVelodyneFrame)
 {
   const fs::path dir = drive().summary.drive_dir;

@@ -1,6 +1,7 @@
 // Detection replay: detections read from per-frame KITTI object label files instead of a
-// network, so the fusion can be evaluated with oracle boxes (ground truth label_2 files) or with
-// detections computed elsewhere (KITTI result files with a 16th score column).
+// network, so the fusion can be evaluated with oracle boxes (ground truth label_2 files), with
+// detections computed elsewhere (KITTI result files with a 16th score column), or with the
+// seeded noise of a real detector drawn on the oracle boxes (detection_noise.h).
 #pragma once
 
 #include <cstdint>
@@ -8,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/detection/detection_noise.h"
 #include "grid_vision_fusion/detection/detector.h"
 #include "grid_vision_fusion/detection/kitti_labels.h"
 
@@ -49,6 +51,8 @@ struct DetectionReplayConfig
   double score_threshold = kDefaultScoreThreshold;
   /// When true a missing file means "no object in this frame"; when false it is an error.
   bool missing_file_is_empty = false;
+  /// A real detector's errors drawn on the labels (keys replay/noise/...); off by default.
+  DetectionNoiseConfig noise;
 
   /// @throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -70,7 +74,9 @@ public:
 
   /// The detections of `frame_index`, boxes clipped to `image_width` × `image_height` (0: no
   /// clipping), in file order; class_id = the type's index in kittiObjectTypes() (types not in
-  /// that list get its size). Labels whose box is empty after clipping are dropped.
+  /// that list get its size). Labels whose box is empty after clipping are dropped. With
+  /// noise.enabled: the labels' detections under the noise of (noise.seed, frame_index), in
+  /// order of decreasing score; the score threshold applies to the noisy scores.
   /// @throws KittiLabelError naming the file for a missing (unless missing_file_is_empty) or
   ///         malformed label file.
   std::vector<Detection> detectionsOf(std::int64_t frame_index, std::uint32_t image_width,

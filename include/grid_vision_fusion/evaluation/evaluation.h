@@ -129,9 +129,22 @@ struct TrackingEvaluationConfig
   /// Two changes of the reported motion of one ground-truth object within this time, while its
   /// truth motion stays the same, are a flicker [s], > 0.
   double flicker_window_s = 2.0;
+  /// A ground-truth object at least this fast over ground counts as moving for the time to its
+  /// first dynamic verdict (TrackingMetrics::dynamic_latency_s) [m/s], > 0.
+  double latency_speed_mps = 1.0;
 
   /// @throws std::invalid_argument naming the bad field.
   void validate() const;
+};
+
+/// The time from a moving object's first match to its first dynamic verdict.
+struct DynamicLatency
+{
+  std::string label;      ///< the ground truth's class
+  std::int64_t track_id;  ///< the ground truth's identity
+  /// [s] from its first match while moving at latency_speed_mps or more to the first match (that
+  /// one included) reported dynamic; negative: never reported dynamic while matched.
+  double latency_s = -1.0;
 };
 
 /// Multi-object tracking figures: CLEAR MOT (Bernardin and Stiefelhagen, 2008) and identity
@@ -170,7 +183,23 @@ struct TrackingMetrics
   std::size_t motion_changes = 0;
   std::size_t motion_flickers = 0;
   std::size_t flickering_tracks = 0;  ///< ground-truth identities with at least one flicker
+  /// Per ground-truth object matched while moving at latency_speed_mps or more, in identity
+  /// order: the time to its first dynamic verdict.
+  std::vector<DynamicLatency> dynamic_latency;
 };
+
+/// Statistics of the dynamic latencies of `latencies` whose label is `label` (empty: all):
+/// count, median and 90th percentile (ErrorStats; an object never reported dynamic counts as
+/// +infinity there), the worst and how many were never reported dynamic.
+struct LatencyStats
+{
+  std::size_t count = 0;
+  double median_s = 0.0;
+  double p90_s = 0.0;
+  double worst_s = 0.0;   ///< +infinity when one was never reported dynamic
+  std::size_t never = 0;  ///< never reported dynamic while matched
+};
+LatencyStats latencyStats(const std::vector<DynamicLatency>& latencies, const std::string& label = "");
 
 /// Everything evaluate() measures.
 struct EvaluationResult

@@ -72,6 +72,10 @@ public:
   /// (Re)starts the filters at `position` [m] with the prior velocity; the mode probability
   /// becomes `p_dynamic` ([0, 1]), e.g. 0.5 for a new object or the last value on a restart.
   void start(const Eigen::Vector2d& position, double p_dynamic);
+  /// Moves both filters to `position` [m] with the measurement's uncertainty, keeping the
+  /// velocity of the constant-velocity model and the mode probability: a jump of the centre
+  /// estimate (the visible part of the object changed) says nothing about the motion.
+  void restartAt(const Eigen::Vector2d& position);
   /// Mixes the two models for a step of `dt` [s] (the mode may switch) and predicts both; dt <= 0
   /// leaves the filter unchanged.
   void predict(double dt);

@@ -8,7 +8,8 @@
 // box overlapping the track's last box by min_iou or more); the cost of a pair is its squared
 // Mahalanobis distance over gate_sigma² plus iou_weight · (1 − IoU). A matched track's motion
 // model is updated with the object's centre, or, when the object passed the gate by its box
-// alone (a jump of the centre estimate), restarted there keeping its P(dynamic); a box cut by
+// alone (a jump of the centre estimate), restarted there keeping its velocity and P(dynamic)
+// (MotionModel::restartAt()); a box cut by
 // the image's left or right edge gives no centre (its visible part moves as the object slides
 // out of view, not with the object): the track keeps its prediction. An object left over starts
 // a tentative track, which becomes confirmed after min_hits hits and is dropped at its first
@@ -114,6 +115,13 @@ private:
     double first_stamp = 0.0;
   };
 
+  /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
+  /// optimal assignment.
+  std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
+  /// A matched track takes its observation: the centre (or a restart there), the grid's evidence.
+  void updateTrack(Track& track, const TrackObservation& observation) const;
+  /// A tentative track for an observation left over.
+  Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
   /// Squared Mahalanobis distance of the observation from the track's predicted position, with
   /// the association noise position_sigma.

@@ -201,11 +201,38 @@ public:
   CellClass classify(std::size_t index) const;
 
 private:
+  /// A systematic sampling of the birth and of the resampling (defined with them).
+  struct SystematicSamples;
+
   void placeGrid(const Eigen::Isometry3d& world_from_sensor, std::int64_t& col, std::int64_t& row) const;
   /// f(block, first_row, end_row) for the blocks of grid rows, in parallel (parallel_).
   template <typename F>
   void forRowBlocks(const F& f) const;
+  /// Resets the filter (and says why in `cycle`) when `stamp` lies before the last scan's or more
+  /// than max_time_gap after it.
+  void resetAfterTimeJump(double stamp, DynamicGridCycle& cycle);
+  /// Step 1, ego motion: places the grid for the sensor pose; after the first scan, moves the
+  /// cells, the scan memory and the particles by the shift (reported in `cycle`).
+  void moveGrid(const Eigen::Isometry3d& world_from_sensor, bool first, DynamicGridCycle& cycle);
+  /// The previous scan's occupied mask, the ages and the motion evidence moved with the grid.
+  void shiftScanMemory(std::int64_t shift_cols, std::int64_t shift_rows);
+  /// The particles moved with the grid, so that they keep their fixed-frame position.
+  void shiftParticles(std::int64_t shift_cols, std::int64_t shift_rows);
+  /// Zeroes the masses the particles carry into the cells (step 3).
+  void clearPredictedMasses();
   void predictParticles(float dt, float keep, float to_static, float to_unknown);
+  /// Steps 4-5 per cell: predicted masses (eq. 5), Bayes update (eq. 6), persistent/newborn split
+  /// (eq. 7), the newborn mass by origin; the sums of step 7 zeroed.
+  void updateCells(double dt_transition);
+  /// The newborn dynamic mass that the mass `hole`, moved out of cell `c` (static mass `s`,
+  /// measurement information `lambda`) with its particles, becomes (vacated_to_dynamic); the
+  /// velocity that left kept for its particles.
+  float vacatedToDynamic(std::size_t c, float s, float lambda, float hole);
+  /// Step 6: persistent weights rescaled to the persistent posterior mass (eq. 8), summed per
+  /// cell with their velocities for step 7.
+  void accumulateVelocities(bool first);
+  /// Step 7: velocity mean and variance given D per cell from the persistent particles (eq. 9).
+  void estimateCellVelocities();
   /// Cuts the grid into one part of whole bands of kRowBlock rows per thread, with about as many
   /// particles each (part_band_). `counted`: block_counts_ already holds the particles per
   /// (particle block, band).
@@ -215,9 +242,43 @@ private:
   /// makes add each cell's particles in particle order, as one thread does, whatever the split.
   template <typename F>
   void forParticlesByCellPart(const F& f) const;
+  /// Steps 8-9: birth in proportion to the newborn mass (`born` newborn particles), then
+  /// resampling; returns the particles in use.
   std::size_t birthAndResample(std::size_t& born, float dt);
+  /// Step 8 (eq. 10): the newborn particles, systematic samples of the cells' newborn mass from
+  /// the offset `u_birth`; returns their count.
+  std::size_t sampleBirths(float u_birth, float dt);
+  /// The newborn particles of the cells of row block `b` (rows [r_begin, r_end)).
+  void birthInRowBlock(std::size_t b, int r_begin, int r_end, const SystematicSamples& samples, float dt);
+  /// Newborn particles [first, end) in cell `c`: position, weight and a velocity by origin.
+  void bearParticles(std::size_t c, std::size_t first, std::size_t end, float dt, BlockRandom& rng,
+                     std::vector<std::int32_t>& candidates);
+  /// Step 9 (eq. 11): systematic resampling of the particles and the `born` newborn ones from the
+  /// offset `u_resample`; returns the particles in use.
+  std::size_t resample(float u_resample, std::size_t born);
+  /// The resampled copies of the items of block `b` (resample()).
+  void resampleBlock(std::size_t b, std::size_t particle_blocks, std::size_t born,
+                     const SystematicSamples& samples);
   /// Appearing and vacated cells of this scan (from occupancy_ and the previous scan's mask).
   void findMotionCells(bool first, float dt);
+  /// The vacated cells (vacated_), in increasing order: within the motion window (`windowed`,
+  /// `window` scans) or against the previous scan's mask.
+  void collectVacatedCells(bool windowed, int window);
+  /// The vacated cells sorted by bucket of kBucket x kBucket cells (counting sort).
+  void bucketVacatedCells();
+  /// The vacated cells that have a vacated neighbour, marked in vacated_count_; whether there is
+  /// any.
+  bool markVacatedEdges();
+  /// vacated_count_ into its summed-area table.
+  void sumVacatedCounts();
+  /// Motion evidence 1 within motion_radius of a vacated edge (when `any_vacated`), else the
+  /// previous evidence decayed over `dt`.
+  void spreadMotionEvidence(float dt, bool any_vacated);
+  /// Motion evidence 1 in the cells that appeared (`window` scans, hit p_o >= `p_hit`) next to
+  /// another that appeared.
+  void markAppearedEdges(int window, float p_hit);
+  /// Scans since each cell held obstacle points / was seen clearly free; this scan's occupied mask.
+  void updateAges(bool evidence, float p_hit);
   /// Rigid-object prior (propagation_rate): static mass of occupied cells on the velocity line of
   /// a moving cell becomes newborn dynamic mass with that cell's velocity.
   void propagateMotion(float dt);

@@ -99,6 +99,32 @@ public:
 
 private:
   int sectorOf(float dx, float dy) const;
+  /// Sizes the per-point and per-block buffers for `points` points and `stat_blocks` blocks of
+  /// counters; every bin's lowest z to +infinity.
+  void prepareBuffers(std::size_t points, std::size_t stat_blocks, const ParallelBlocks& parallel);
+  /// Adds the counters of the first `blocks` blocks to `stats` in block order and clears them.
+  void addBlockStats(std::size_t blocks, InverseSensorModelStats& stats);
+  /// Pass 1: each point into the world-aligned sensor-centred polar frame (`rot`: world <- sensor
+  /// rotation) and its (sector, range bin); invalid and out-of-range points dropped.
+  void binPoints(const PointCloudView& cloud, const Eigen::Matrix3f& rot, const ParallelBlocks& parallel);
+  /// The lowest point of each (sector, range bin).
+  void lowestPointPerBin(std::size_t points);
+  /// Ground height along each sector, bin by bin outwards from the sensor.
+  void estimateGround(const ParallelBlocks& parallel);
+  /// Pass 2: each point as overhang, ground or obstacle; per point block and sector the nearest
+  /// obstacle hit and the farthest return; the cell of each obstacle point. (ox, oy): the sensor
+  /// relative to the grid's corner [m].
+  void classifyPoints(const GridGeometry& grid, double ox, double oy, const ParallelBlocks& parallel);
+  /// The per-block nearest hits and farthest returns combined per sector.
+  void combineSectorRanges(std::size_t point_blocks, const ParallelBlocks& parallel);
+  /// The cells that hold obstacle points.
+  void markHitCells(const GridGeometry& grid, const ParallelBlocks& parallel);
+  /// The cells next to a hit, which are never free (hit_neighbours_not_free).
+  void dilateHits(const GridGeometry& grid, const ParallelBlocks& parallel);
+  /// Polar ray casting per cell centre: p_o of every cell from its sector's nearest hit and
+  /// farthest return.
+  void castRays(const GridGeometry& grid, double ox, double oy, std::vector<float>& occupancy,
+                const ParallelBlocks& parallel);
 
   InverseSensorModelConfig config_;
   int sectors_ = 0;

@@ -81,7 +81,11 @@ struct KittiBagSummary
 /// Topics (kitti2bag names): /kitti/velo/pointcloud, /kitti/<camera>/image_raw and camera_info,
 /// /kitti/oxts/imu, /kitti/oxts/gps/fix, /kitti/oxts/gps/vel, /tf (world → base_link, one per
 /// frame at the OXTS stamp), /tf_static (one latched message at the first stamp: base_link →
-/// imu_link → velo_link → camera frames). The bag is written to `<output_bag>.tmp` and renamed
+/// imu_link → velo_link → camera frames). A KITTI raw drive's first scan and images are stamped
+/// before its first OXTS record (13 ms on drive 0001): the first pose is also written at the
+/// first frame's earliest sensor stamp, moved back along the record's velocity and angular
+/// rate (poseBefore()), when that is at most kMaxPoseExtrapolationS earlier, so that the first
+/// frame has a pose. The bag is written to `<output_bag>.tmp` and renamed
 /// only when every frame was converted; on any error the temporary file is removed.
 /// @throws std::invalid_argument for invalid options; std::runtime_error naming the file at fault
 /// (missing calibration key, missing frame file, truncated .bin, short timestamps file,
@@ -89,6 +93,15 @@ struct KittiBagSummary
 KittiBagSummary convertKittiDrive(const KittiBagOptions& options);
 
 // -- The message builders used by convertKittiDrive, public for tests and other tools. --
+
+/// The longest time by which the first frame's sensors may precede its first OXTS record and
+/// still get a pose [s]: half a frame at 10 Hz. KITTI's raw drives lead by about 13 ms; a
+/// longer lead is a broken drive, whose first frame is left without a pose.
+constexpr double kMaxPoseExtrapolationS = 0.05;
+
+/// The pose `dt` seconds before `pose` [s], moved back along the OXTS record's body velocity
+/// (forward, left, up) and angular rate (about forward, left, up), assumed constant over `dt`.
+Eigen::Isometry3d poseBefore(const Eigen::Isometry3d& pose, const OxtsRecord& record, double dt);
 
 /// ros::Time of a KITTI stamp. @throws std::runtime_error when it is outside ros::Time's range.
 ros::Time toRosTime(const KittiStamp& stamp);

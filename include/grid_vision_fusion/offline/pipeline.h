@@ -23,11 +23,11 @@
 #include "grid_vision_fusion/Detection2DArray.h"
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/ProjectedGrid.h"
-#include "grid_vision_fusion/ros/detector_stage.h"
-#include "grid_vision_fusion/ros/fusion_stage.h"
-#include "grid_vision_fusion/ros/grid_stage.h"
 #include "grid_vision_fusion/ros/node_params.h"
-#include "grid_vision_fusion/ros/projection_stage.h"
+#include "grid_vision_fusion/ros_stages/detector_stage.h"
+#include "grid_vision_fusion/ros_stages/fusion_stage.h"
+#include "grid_vision_fusion/ros_stages/grid_stage.h"
+#include "grid_vision_fusion/ros_stages/projection_stage.h"
 
 namespace grid_vision_fusion
 {

@@ -134,6 +134,82 @@ struct DetectorParams
   static DetectorParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
 };
 
+/// The replay backend's noise model (keys replay/noise/..., detection_noise.h).
+template <typename Visitor>
+void visitReplayNoiseParams(DetectionNoiseConfig& n, Visitor& v)
+{
+  const std::string k = "replay/noise/";
+  v(k + "enabled", n.enabled);
+  v(k + "seed", n.seed);
+  v(k + "components/misses", n.misses);
+  v(k + "components/box_jitter", n.box_jitter);
+  v(k + "components/partial_boxes", n.partial_boxes);
+  v(k + "components/confusion", n.confusion);
+  v(k + "components/extra_boxes", n.extra_boxes);
+  v(k + "components/false_positives", n.false_positives);
+  v(k + "min_score", n.min_score);
+  v(k + "score_max", n.score_max);
+  v(k + "fully_occluded_detected", n.fully_occluded_detected);
+  v(k + "keep_other_labels", n.keep_other_labels);
+  const auto weights = [&](const std::string& prefix, NoiseCovariateWeights& w)
+  {
+    v(prefix + "car", w.car);
+    v(prefix + "van", w.van);
+    v(prefix + "truck", w.truck);
+    v(prefix + "pedestrian", w.pedestrian);
+    v(prefix + "cyclist", w.cyclist);
+    v(prefix + "height_slope", w.height_slope);
+    v(prefix + "occlusion1", w.occlusion1);
+    v(prefix + "occlusion2", w.occlusion2);
+    v(prefix + "truncation", w.truncation);
+  };
+  weights(k + "presence/", n.presence);
+  weights(k + "score/", n.score);
+  v(k + "score/sigma", n.score_sigma);
+  const auto edge = [&](const std::string& name, BoxEdgeNoise& e)
+  {
+    v(k + "box/" + name + "/bias", e.bias);
+    v(k + "box/" + name + "/sigma_px", e.sigma_px);
+    v(k + "box/" + name + "/sigma_fraction", e.sigma_fraction);
+    v(k + "box/" + name + "/tail_probability", e.tail_probability);
+    v(k + "box/" + name + "/tail_scale", e.tail_scale);
+  };
+  edge("left", n.left);
+  edge("top", n.top);
+  edge("right", n.right);
+  edge("bottom", n.bottom);
+  v(k + "box/person_scale", n.person_scale);
+  v(k + "partial/occlusion0", n.partial_occlusion0);
+  v(k + "partial/occlusion1", n.partial_occlusion1);
+  v(k + "partial/occlusion2", n.partial_occlusion2);
+  v(k + "partial/width_min", n.partial_width_min);
+  v(k + "partial/width_max", n.partial_width_max);
+  v(k + "confusion/car_to_van", n.car_to_van);
+  v(k + "confusion/car_to_truck", n.car_to_truck);
+  v(k + "confusion/van_to_car", n.van_to_car);
+  v(k + "confusion/van_to_truck", n.van_to_truck);
+  v(k + "confusion/truck_to_car", n.truck_to_car);
+  v(k + "confusion/truck_to_van", n.truck_to_van);
+  v(k + "confusion/pedestrian_to_cyclist", n.pedestrian_to_cyclist);
+  v(k + "confusion/cyclist_to_pedestrian", n.cyclist_to_pedestrian);
+  v(k + "extra_rate", n.extra_rate);
+  auto& f = n.background;
+  v(k + "false_positives/rate", f.rate);
+  v(k + "false_positives/score_mean", f.score_mean);
+  v(k + "false_positives/score_sigma", f.score_sigma);
+  v(k + "false_positives/height_median", f.height_median);
+  v(k + "false_positives/height_sigma", f.height_sigma);
+  v(k + "false_positives/bottom_min", f.bottom_min);
+  v(k + "false_positives/bottom_max", f.bottom_max);
+  v(k + "false_positives/vehicle_aspect", f.vehicle_aspect);
+  v(k + "false_positives/person_aspect", f.person_aspect);
+  v(k + "false_positives/car", f.car);
+  v(k + "false_positives/van", f.van);
+  v(k + "false_positives/truck", f.truck);
+  v(k + "false_positives/pedestrian", f.pedestrian);
+  v(k + "false_positives/cyclist", f.cyclist);
+}
+
 template <typename Visitor>
 void visitParams(DetectorParams& p, Visitor& v)
 {
@@ -162,6 +238,7 @@ void visitParams(DetectorParams& p, Visitor& v)
   v("replay/class_map", p.replay.class_map);
   v("replay/default_score", p.replay.default_score);
   v("replay/missing_file_is_empty", p.replay.missing_file_is_empty);
+  visitReplayNoiseParams(p.replay.noise, v);
 }
 
 // --- grid_projection ---------------------------------------------------------------------------

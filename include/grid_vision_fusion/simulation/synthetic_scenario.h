@@ -14,9 +14,13 @@ namespace grid_vision_fusion
 /// Everything a synthetic drive needs.
 struct SyntheticScenario
 {
-  std::uint32_t seed = 42;                  ///< seeds the lidar noise and dropouts
-  double duration_s = 10.0;                 ///< length of the drive [s], > 0
-  double frame_rate_hz = 10.0;              ///< frames per second (KITTI: 10), > 0
+  std::uint32_t seed = 42;      ///< seeds the lidar noise and dropouts
+  double duration_s = 10.0;     ///< length of the drive [s], > 0
+  double frame_rate_hz = 10.0;  ///< frames per second (KITTI: 10), > 0
+  /// Each frame's OXTS record is sampled and stamped this much after its scan and image [s],
+  /// [0, half a frame): KITTI's raw drives record it about 13 ms later (their first scan has no
+  /// earlier pose).
+  double oxts_delay_s = 0.0;
   Trajectory ego = Trajectory::parked({});  ///< ego vehicle (IMU / base_link) ground pose over time
   std::vector<Actor> actors;
   std::vector<SceneryBox> scenery;
@@ -31,7 +35,7 @@ struct SyntheticScenario
   void validate() const;
 };
 
-/// Reads a scenario YAML file. Keys: seed, duration, frame_rate, road {center_y, half_width,
+/// Reads a scenario YAML file. Keys: seed, duration, frame_rate, oxts_delay, road {center_y, half_width,
 /// lane_width}, lidar {azimuth_steps, range_noise_std, dropout, min_range, max_range}, ego and
 /// every entry of actors with one motion: `parked: {x, y, yaw}`, `waypoints: [[t, x, y], ...]`
 /// (yaw along the path, Trajectory::waypoints()), `waypoints: [[t, x, y, yaw], ...]` (yaw given

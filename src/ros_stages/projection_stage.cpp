@@ -1,4 +1,4 @@
-#include "grid_vision_fusion/ros/projection_stage.h"
+#include "grid_vision_fusion/ros_stages/projection_stage.h"
 
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>

@@ -9,12 +9,12 @@
 
 #include <cmath>
 
-#include "grid_vision_fusion/ros/detector_stage.h"
-#include "grid_vision_fusion/ros/fusion_stage.h"
-#include "grid_vision_fusion/ros/grid_stage.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
-#include "grid_vision_fusion/ros/projection_stage.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
+#include "grid_vision_fusion/ros_stages/detector_stage.h"
+#include "grid_vision_fusion/ros_stages/fusion_stage.h"
+#include "grid_vision_fusion/ros_stages/grid_stage.h"
+#include "grid_vision_fusion/ros_stages/projection_stage.h"
 
 namespace grid_vision_fusion
 {

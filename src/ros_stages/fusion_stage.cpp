@@ -1,4 +1,4 @@
-#include "grid_vision_fusion/ros/fusion_stage.h"
+#include "grid_vision_fusion/ros_stages/fusion_stage.h"
 
 #include <stdexcept>
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/DynamicGrid.h"
-#include "grid_vision_fusion/ros/grid_for_image.h"
+#include "grid_vision_fusion/ros_sync/grid_for_image.h"
 
 namespace grid_vision_fusion
 {

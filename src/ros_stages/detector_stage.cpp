@@ -1,4 +1,4 @@
-#include "grid_vision_fusion/ros/detector_stage.h"
+#include "grid_vision_fusion/ros_stages/detector_stage.h"
 
 #include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"

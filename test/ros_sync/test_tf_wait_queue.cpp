@@ -9,7 +9,7 @@
 #include <atomic>
 #include <thread>
 
-#include "grid_vision_fusion/ros/tf_wait_queue.h"
+#include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
 {
