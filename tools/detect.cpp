@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -377,14 +378,12 @@ gvf::YoloDetectorConfig detectorConfig(const Options& o)
   return config;
 }
 
-int run(const Options& o)
+/// The detector of `config`; an ONNX model that fails at its input size gets the hint --input.
+std::unique_ptr<gvf::YoloDetector> loadDetector(const gvf::YoloDetectorConfig& config)
 {
-  const std::vector<fs::path> images = listImages(o.images);
-  const gvf::YoloDetectorConfig config = detectorConfig(o);
-  std::optional<gvf::YoloDetector> loaded;
   try
   {
-    loaded.emplace(config);
+    return std::make_unique<gvf::YoloDetector>(config);
   }
   catch (const gvf::YoloModelError& e)
   {
@@ -396,27 +395,105 @@ int run(const Options& o)
                                      "for: give it with --input WxH)"
                                    : ""));
   }
-  gvf::YoloDetector& detector = *loaded;
-  for (const std::string& warning : detector.warnings())
+}
+
+/// What the run did, for the summary.
+struct RunSummary
+{
+  std::map<std::string, std::size_t> per_type;  ///< detections written by KITTI type
+  std::vector<std::string> unreadable;          ///< images that could not be read
+  std::vector<double> detect_ms;                ///< detector time of each image done [ms]
+  std::size_t detections = 0;
+  double wall_s = 0.0;
+};
+
+/// Detects the objects of `image` and writes its label file (and overlay) into `output`.
+void detectImage(gvf::YoloDetector& detector, const cv::Mat& image, const fs::path& image_path,
+                 const fs::path& output, bool overlay, RunSummary& summary)
+{
+  const auto before = std::chrono::steady_clock::now();
+  std::vector<gvf::Detection> detections = detector.detect(image, gvf::PixelFormat::kBgr8);
+  summary.detect_ms.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - before).count());
+  std::vector<gvf::KittiObjectLabel> labels;
+  for (gvf::Detection& detection : detections)
+  {
+    labels.push_back(gvf::kittiResultOf(detection));
+    detection.label = labels.back().type;
+    ++summary.per_type[detection.label];
+  }
+  summary.detections += labels.size();
+  gvf::writeKittiLabels((output / (image_path.stem().string() + ".txt")).string(), labels);
+  if (overlay)
+  {
+    cv::Mat drawn = image.clone();
+    gvf::drawDetections(drawn, detections);
+    const fs::path overlay_path = output / "overlay" / (image_path.stem().string() + ".png");
+    if (!cv::imwrite(overlay_path.string(), drawn))
+    {
+      throw std::runtime_error(overlay_path.string() + ": cannot write the overlay image");
+    }
+  }
+}
+
+/// The summary on stdout: images, detections per type, time per image, the replay options.
+void printSummary(const RunSummary& summary, const std::vector<fs::path>& images, const fs::path& output,
+                  double score_threshold)
+{
+  const std::size_t done = images.size() - summary.unreadable.size();
+  std::printf("detect: %zu of %zu images, %zu detections (score >= %g) in %.1f s on %s\n", done,
+              images.size(), summary.detections, score_threshold, summary.wall_s,
+              gvf::machineInfo().describe().c_str());
+  if (done > 0)
+  {
+    double sum = 0.0;
+    for (double ms : summary.detect_ms)
+    {
+      sum += ms;
+    }
+    std::printf(
+        "  per image: detector median %.1f ms, mean %.1f ms (letterbox, network, decoding, NMS); "
+        "wall %.1f ms (reading and writing included)\n",
+        medianOf(summary.detect_ms), sum / static_cast<double>(done),
+        1e3 * summary.wall_s / static_cast<double>(done));
+  }
+  std::printf("  per type:");
+  for (const auto& [type, count] : summary.per_type)
+  {
+    std::printf(" %s %zu", type.c_str(), count);
+  }
+  std::printf("%s\n", summary.per_type.empty() ? " none" : "");
+  std::printf("  label files in %s", output.string().c_str());
+  const std::string pattern = replayPatternOf(images);
+  if (!pattern.empty())
+  {
+    std::printf(" (replay: --replay-directory %s --replay-file-pattern %s)", output.string().c_str(),
+                pattern.c_str());
+  }
+  std::printf("\n");
+}
+
+int run(const Options& o)
+{
+  const std::vector<fs::path> images = listImages(o.images);
+  const gvf::YoloDetectorConfig config = detectorConfig(o);
+  const std::unique_ptr<gvf::YoloDetector> detector = loadDetector(config);
+  for (const std::string& warning : detector->warnings())
   {
     std::cerr << "detect: warning: " << warning << "\n";
   }
   const fs::path output(o.output);
-  const fs::path overlay_dir = output / "overlay";
+  const fs::path created = o.overlay ? output / "overlay" : output;
   std::error_code error;
-  fs::create_directories(o.overlay ? overlay_dir : output, error);
+  fs::create_directories(created, error);
   if (error)
   {
-    throw std::runtime_error("cannot create the output folder " +
-                             (o.overlay ? overlay_dir : output).string() + ": " + error.message());
+    throw std::runtime_error("cannot create the output folder " + created.string() + ": " + error.message());
   }
-  std::cerr << "detect: " << images.size() << " images, " << detector.description()
+  std::cerr << "detect: " << images.size() << " images, " << detector->description()
             << ", score >= " << config.score_threshold << " -> " << output.string() << "\n";
 
-  std::map<std::string, std::size_t> per_type;
-  std::vector<std::string> unreadable;
-  std::vector<double> detect_ms;
-  std::size_t detections_written = 0;
+  RunSummary summary;
   const bool interactive = isatty(STDERR_FILENO) != 0;
   gvf::ProgressBar bar(std::cerr, images.size(), "images", interactive);
   const auto start = std::chrono::steady_clock::now();
@@ -426,81 +503,29 @@ int run(const Options& o)
     {
       bar.update(i);
     }
-    const fs::path& image_path = images[i];
-    const cv::Mat image = cv::imread(image_path.string(), cv::IMREAD_COLOR);
+    const cv::Mat image = cv::imread(images[i].string(), cv::IMREAD_COLOR);
     if (image.empty())
     {
-      std::cerr << (interactive && !o.quiet ? "\n" : "") << "detect: warning: " << image_path.string()
+      std::cerr << (interactive && !o.quiet ? "\n" : "") << "detect: warning: " << images[i].string()
                 << ": cannot read the image (skipped, no label file written)\n";
-      unreadable.push_back(image_path.string());
+      summary.unreadable.push_back(images[i].string());
       continue;
     }
-    const auto before = std::chrono::steady_clock::now();
-    std::vector<gvf::Detection> detections = detector.detect(image, gvf::PixelFormat::kBgr8);
-    detect_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - before).count());
-    std::vector<gvf::KittiObjectLabel> labels;
-    for (gvf::Detection& detection : detections)
-    {
-      labels.push_back(gvf::kittiResultOf(detection));
-      detection.label = labels.back().type;
-      ++per_type[detection.label];
-    }
-    detections_written += labels.size();
-    gvf::writeKittiLabels((output / (image_path.stem().string() + ".txt")).string(), labels);
-    if (o.overlay)
-    {
-      cv::Mat drawn = image.clone();
-      gvf::drawDetections(drawn, detections);
-      const fs::path overlay_path = overlay_dir / (image_path.stem().string() + ".png");
-      if (!cv::imwrite(overlay_path.string(), drawn))
-      {
-        throw std::runtime_error(overlay_path.string() + ": cannot write the overlay image");
-      }
-    }
+    detectImage(*detector, image, images[i], output, o.overlay, summary);
   }
   if (!o.quiet)
   {
     bar.update(images.size());
     bar.finish();
   }
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  const std::size_t done = images.size() - unreadable.size();
-  std::printf("detect: %zu of %zu images, %zu detections (score >= %g) in %.1f s on %s\n", done,
-              images.size(), detections_written, config.score_threshold, wall_s,
-              gvf::machineInfo().describe().c_str());
-  if (done > 0)
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  printSummary(summary, images, output, config.score_threshold);
+  if (!summary.unreadable.empty())
   {
-    double sum = 0.0;
-    for (double ms : detect_ms)
-    {
-      sum += ms;
-    }
-    std::printf(
-        "  per image: detector median %.1f ms, mean %.1f ms (letterbox, network, decoding, NMS); "
-        "wall %.1f ms (reading and writing included)\n",
-        medianOf(detect_ms), sum / static_cast<double>(done), 1e3 * wall_s / static_cast<double>(done));
-  }
-  std::printf("  per type:");
-  for (const auto& [type, count] : per_type)
-  {
-    std::printf(" %s %zu", type.c_str(), count);
-  }
-  std::printf("%s\n", per_type.empty() ? " none" : "");
-  std::printf("  label files in %s", output.string().c_str());
-  const std::string pattern = replayPatternOf(images);
-  if (!pattern.empty())
-  {
-    std::printf(" (replay: --replay-directory %s --replay-file-pattern %s)", output.string().c_str(),
-                pattern.c_str());
-  }
-  std::printf("\n");
-  if (!unreadable.empty())
-  {
-    std::cerr << "detect: " << unreadable.size() << " image(s) could not be read, no label file written for "
-              << (unreadable.size() == 1 ? "it" : "them") << ": " << unreadable.front()
-              << (unreadable.size() > 1 ? ", ..." : "") << "\n";
+    std::cerr << "detect: " << summary.unreadable.size()
+              << " image(s) could not be read, no label file written for "
+              << (summary.unreadable.size() == 1 ? "it" : "them") << ": " << summary.unreadable.front()
+              << (summary.unreadable.size() > 1 ? ", ..." : "") << "\n";
     return kExitFailure;
   }
   return 0;
