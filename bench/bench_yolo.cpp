@@ -17,12 +17,20 @@
 //      (per layer type: time from cv::dnn::Net::getPerfProfile, FLOPs, achieved GFLOP/s and the
 //      share of the frame; convolutions also by kernel size: where the time beyond the FLOP
 //      bound goes)
+//      devel/lib/grid_vision_fusion/bench_yolo --model M.onnx --input 640x192 [--model M2 --input WxH
+//      ...] [--weights W] [--class-names N] [--image FILE] [--iterations N] [--opencv-conv]
+//      [--benchmark_repetitions=5 --benchmark_enable_random_interleaving=true]
+//      (trained models, e.g. those of scripts/fetch_model.sh, instead of the random Darknet ones:
+//      each --model with the --input (and --weights for a Darknet cfg) that follow it; several
+//      in one run for figures taken under the same load; on --image, a KITTI frame, or on a
+//      random image of KITTI's size)
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/dnn/all_layers.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <cstdint>
 #include <cstdio>
@@ -31,9 +39,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/detection/winograd_convolution.h"
@@ -105,8 +116,8 @@ struct Model
   bool winograd = true;  ///< false: OpenCV's convolution for every layer
 };
 
-void benchmarkModel(benchmark::State& state, const Model& model, const std::string& weights,
-                    const MachineInfo& peak)
+/// The detector configuration of a model of models/yolo with the given weights.
+YoloDetectorConfig darknetConfig(const Model& model, const std::string& weights)
 {
   YoloDetectorConfig config;
   config.model_path = kCfgDir + "/" + model.cfg;
@@ -116,9 +127,29 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
   config.input_height = model.input;
   config.score_threshold = 0.5;
   config.winograd = model.winograd;
-  YoloDetector detector(config);
+  return config;
+}
+
+/// A random image of KITTI's size (1242 × 375), or the image at `path`.
+cv::Mat benchmarkImage(const std::string& path)
+{
+  if (!path.empty())
+  {
+    cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+    if (image.empty())
+    {
+      throw std::runtime_error(path + ": cannot read the image");
+    }
+    return image;
+  }
   cv::Mat image(375, 1242, CV_8UC3);
   cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
+  return image;
+}
+
+void benchmarkDetector(benchmark::State& state, YoloDetector& detector, const cv::Mat& image,
+                       const MachineInfo& peak)
+{
   detector.detect(image, PixelFormat::kBgr8);  // second warm-up, at the benchmark's image size
   const double cpu_start = processCpuSeconds();
   for (auto _ : state)
@@ -136,6 +167,13 @@ void benchmarkModel(benchmark::State& state, const Model& model, const std::stri
       benchmark::Counter(flops / 1e9 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["peak_GFLOPs"] = peak.peakGflops();
   state.counters["FLOP_bound_ms"] = flops / (peak.peakGflops() * 1e9) * 1e3;
+}
+
+void benchmarkModel(benchmark::State& state, const YoloDetectorConfig& config, const cv::Mat& image,
+                    const MachineInfo& peak)
+{
+  YoloDetector detector(config);
+  benchmarkDetector(state, detector, image, peak);
 }
 
 /// Time and FLOPs of one group of layers over the profiled frames.
@@ -242,6 +280,130 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
   return 0;
 }
 
+/// A trained model given on the command line.
+struct TrainedModel
+{
+  std::string model;
+  std::string weights;
+  int width = 0;
+  int height = 0;
+};
+
+/// The --model ... options (removed from argv, Google Benchmark's own flags left); false when
+/// there is none. @throws std::invalid_argument for a malformed option.
+bool parseTrainedModels(int& argc, char** argv, std::vector<TrainedModel>& models, std::string& class_names,
+                        std::string& image, int& iterations, bool& opencv_conv)
+{
+  std::vector<char*> rest{argv[0]};
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string
+    {
+      if (i + 1 >= argc)
+      {
+        throw std::invalid_argument(arg + " needs a value");
+      }
+      return argv[++i];
+    };
+    if (arg == "--model")
+    {
+      models.push_back({value(), "", 0, 0});
+    }
+    else if (arg == "--input" || arg == "--weights")
+    {
+      if (models.empty())
+      {
+        throw std::invalid_argument(arg + " applies to the --model before it: give --model first");
+      }
+      const std::string text = value();
+      if (arg == "--weights")
+      {
+        models.back().weights = text;
+        continue;
+      }
+      char end = 0;
+      if (std::sscanf(text.c_str(), "%dx%d%c", &models.back().width, &models.back().height, &end) != 2 ||
+          models.back().width <= 0 || models.back().height <= 0)
+      {
+        throw std::invalid_argument("--input wants WxH, e.g. 640x192, got \"" + text + "\"");
+      }
+    }
+    else if (arg == "--class-names")
+    {
+      class_names = value();
+    }
+    else if (arg == "--image")
+    {
+      image = value();
+    }
+    else if (arg == "--iterations")
+    {
+      iterations = std::atoi(value().c_str());
+      if (iterations <= 0)
+      {
+        throw std::invalid_argument("--iterations wants a positive count");
+      }
+    }
+    else if (arg == "--opencv-conv")
+    {
+      opencv_conv = true;
+    }
+    else
+    {
+      rest.push_back(argv[i]);
+    }
+  }
+  if (models.empty())
+  {
+    if (!image.empty() || !class_names.empty())
+    {
+      throw std::invalid_argument("--image and --class-names apply to the models given by --model");
+    }
+    return false;
+  }
+  argc = static_cast<int>(rest.size());
+  std::copy(rest.begin(), rest.end(), argv);
+  return true;
+}
+
+/// Registers one benchmark per trained model (and its /opencv_conv variant when asked), named
+/// after the model file and its input size.
+void registerTrainedModels(const std::vector<TrainedModel>& models, const std::string& class_names,
+                           const cv::Mat& image, int iterations, bool opencv_conv, const MachineInfo& peak)
+{
+  for (const TrainedModel& trained : models)
+  {
+    for (const bool winograd : {true, false})
+    {
+      if (!winograd && !opencv_conv)
+      {
+        continue;
+      }
+      YoloDetectorConfig config;
+      config.model_path = trained.model;
+      config.weights_path = trained.weights;
+      config.class_names_path = class_names.empty() ? kCfgDir + "/coco.names" : class_names;
+      config.input_width = trained.width;
+      config.input_height = trained.height;
+      config.score_threshold = 0.25;
+      config.winograd = winograd;
+      // Loaded here, so that a missing or mismatched model file is an error before any run.
+      const auto detector = std::make_shared<YoloDetector>(config);
+      const std::string size =
+          trained.width > 0 ? std::to_string(trained.width) + "x" + std::to_string(trained.height) : "cfg";
+      const std::string name = std::filesystem::path(trained.model).filename().string() + "@" + size +
+                               (winograd ? "" : "/opencv_conv");
+      benchmark::RegisterBenchmark(name.c_str(), [detector, image, peak](benchmark::State& state)
+                                   { benchmarkDetector(state, *detector, image, peak); })
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(iterations)
+          ->MeasureProcessCPUTime()
+          ->UseRealTime();
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -323,6 +485,40 @@ int main(int argc, char** argv)
                                   ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv"
                                   : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution in both");
 
+  std::printf("machine: %s\nopencv: %s, %d threads\n", peak.describe().c_str(),
+              cv::getVersionString().c_str(), cv::getNumThreads());
+  std::fflush(stdout);
+
+  std::vector<TrainedModel> trained;
+  std::string class_names, image_path;
+  int iterations = 10;
+  bool opencv_conv = false;
+  try
+  {
+    if (parseTrainedModels(argc, argv, trained, class_names, image_path, iterations, opencv_conv))
+    {
+      registerTrainedModels(trained, class_names, benchmarkImage(image_path), iterations, opencv_conv, peak);
+      benchmark::Initialize(&argc, argv);
+      if (benchmark::ReportUnrecognizedArguments(argc, argv))
+      {
+        return 2;
+      }
+      benchmark::RunSpecifiedBenchmarks();
+      benchmark::Shutdown();
+      return 0;
+    }
+  }
+  catch (const std::invalid_argument& e)
+  {
+    std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+    return 2;
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+    return 1;
+  }
+
   char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
   if (mkdtemp(pattern) == nullptr)
   {
@@ -344,8 +540,10 @@ int main(int argc, char** argv)
     for (const Model& model : models)
     {
       const std::string weights = model.cfg == "yolov3.cfg" ? yolov3_weights : tiny_weights;
-      benchmark::RegisterBenchmark(model.name.c_str(), [model, weights, peak](benchmark::State& state)
-                                   { benchmarkModel(state, model, weights, peak); })
+      const YoloDetectorConfig config = darknetConfig(model, weights);
+      const cv::Mat image = benchmarkImage("");
+      benchmark::RegisterBenchmark(model.name.c_str(), [config, image, peak](benchmark::State& state)
+                                   { benchmarkModel(state, config, image, peak); })
           ->Unit(benchmark::kMillisecond)
           ->Iterations(model.iterations)
           ->MeasureProcessCPUTime()

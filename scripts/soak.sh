@@ -11,7 +11,7 @@
 #   --scenario FILE  the drive (default: config/synthetic_drive_long.yaml)
 #   --rate R         rosbag play rate (default 1: real time)
 #   --keep           keep the drive and the bag (several GB for the default drive)
-#   --model CFG --weights FILE   run the network (OpenCV DNN) instead of replaying the labels,
+#   --model M --weights FILE   run the network (OpenCV DNN) instead of replaying the labels,
 #                    e.g. models/yolo/yolov3-tiny.cfg and weights from `bench_yolo --write-weights`
 # Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames), DIR/replay.log.
 set -eo pipefail
@@ -29,8 +29,8 @@ while [[ $# -gt 0 ]]; do
     --scenario) scenario=$(realpath "$2"); shift ;;
     --rate) rate=$2; shift ;;
     --keep) keep=true ;;
-    --model) detector+=(model_cfg:="$(realpath "$2")"); shift ;;
-    --weights) detector+=(model_weights:="$(realpath "$2")"); shift ;;
+    --model) detector+=(model:="$(realpath "$2")"); shift ;;
+    --weights) detector+=(weights:="$(realpath "$2")"); shift ;;
     -h | --help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "soak: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac

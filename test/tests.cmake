@@ -53,12 +53,12 @@ gvf_gtest(test_offline
   DEFINITIONS GVF_EVALUATE_TOOL="$<TARGET_FILE:evaluate>" GVF_KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>"
   DEPENDS evaluate kitti_to_bag)
 gvf_gtest(test_tools
-  SOURCES test/tools/test_bag_summary.cpp test/tools/test_tool_errors.cpp
-  LINK grid_vision_fusion_offline
+  SOURCES test/tools/test_bag_summary.cpp test/tools/test_tool_errors.cpp test/tools/test_detect.cpp
+  LINK grid_vision_fusion_offline gvf_tiny_darknet
   DEFINITIONS BAG_SUMMARY="$<TARGET_FILE:bag_summary>" RUN_PIPELINE="$<TARGET_FILE:run_pipeline>"
     KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>" EVALUATE="$<TARGET_FILE:evaluate>"
-    MAKE_SYNTHETIC_DRIVE="$<TARGET_FILE:make_synthetic_drive>"
-  DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive)
+    MAKE_SYNTHETIC_DRIVE="$<TARGET_FILE:make_synthetic_drive>" DETECT="$<TARGET_FILE:detect>"
+  DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive detect)
 
 # --- nodelets in a manager (rostest) -----------------------------------------------------------
 gvf_rostest(test_dynamic_grid_nodelet LAUNCH test/nodelets/dynamic_grid_nodelet.test
@@ -106,6 +106,8 @@ endforeach()
 roslaunch_add_file_check(launch/perception.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch)
 roslaunch_add_file_check(launch/kitti_replay.launch model_weights:=yolov3.weights bag:=drive.bag record:=out.bag)
+roslaunch_add_file_check(launch/kitti_replay.launch model:=yolov5s-640x192.onnx input_width:=640 input_height:=192 bag:=drive.bag)
+roslaunch_add_file_check(launch/perception.launch model:=yolov3-tiny.cfg weights:=yolov3-tiny.weights input_width:=416 input_height:=416)
 roslaunch_add_file_check(test/nodelets USE_TEST_DEPENDENCIES)
 
 # --- repository rules: formatting, cited paths, what the plugin library links -----------------

@@ -1,11 +1,17 @@
 #include "grid_vision_fusion/detection/kitti_labels.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
+
+#include "grid_vision_fusion/cli/temporary_output.h"
 
 namespace grid_vision_fusion
 {
@@ -123,6 +129,74 @@ std::vector<KittiObjectLabel> readKittiLabels(const std::string& path)
     throw KittiLabelError(path + ": cannot open the KITTI label file");
   }
   return parseKittiLabels(file, path);
+}
+
+namespace
+{
+/// `value` in the shortest decimal form that reads back to the same float ("712.4", "-1000").
+void appendNumber(std::string& line, float value, const char* field)
+{
+  if (!std::isfinite(value))
+  {
+    throw std::invalid_argument(std::string("KITTI label field ") + field + " is not finite");
+  }
+  char text[32];
+  const std::to_chars_result written = std::to_chars(text, text + sizeof(text), value);
+  line += ' ';
+  line.append(text, written.ptr);
+}
+
+}  // namespace
+
+std::string formatKittiLabel(const KittiObjectLabel& label)
+{
+  if (label.type.empty() ||
+      std::any_of(label.type.begin(), label.type.end(), [](unsigned char c) { return std::isspace(c) != 0; }))
+  {
+    throw std::invalid_argument("KITTI label type must be one word, got \"" + label.type + "\"");
+  }
+  std::string line = label.type;
+  appendNumber(line, label.truncated, "truncated");
+  line += ' ' + std::to_string(label.occluded);
+  const float numbers[] = {label.alpha, label.left,   label.top, label.right, label.bottom, label.height,
+                           label.width, label.length, label.x,   label.y,     label.z,      label.rotation_y};
+  for (std::size_t i = 0; i < 12; ++i)
+  {
+    appendNumber(line, numbers[i], kFieldNames[3 + i]);
+  }
+  if (label.score)
+  {
+    appendNumber(line, *label.score, "score");
+  }
+  return line;
+}
+
+void writeKittiLabels(const std::string& path, const std::vector<KittiObjectLabel>& labels)
+{
+  std::string text;
+  for (const KittiObjectLabel& label : labels)
+  {
+    text += formatKittiLabel(label);
+    text += '\n';
+  }
+  TemporaryOutput output(path);
+  {
+    std::ofstream file(output.temporary(), std::ios::binary);
+    file << text;
+    file.close();
+    if (!file)
+    {
+      throw KittiLabelError(path + ": cannot write the KITTI label file");
+    }
+  }
+  try
+  {
+    output.commit();
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw KittiLabelError(path + ": cannot write the KITTI label file (" + e.what() + ")");
+  }
 }
 
 }  // namespace grid_vision_fusion

@@ -1,9 +1,17 @@
-// KITTI object label reader: real label_2 files, result files with scores, malformed input.
+// KITTI object label reader: real label_2 files, result files with scores, malformed input; the
+// writer (every line parses back to the same label) and detections as result lines.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <sstream>
 
 #include "grid_vision_fusion/detection/kitti_labels.h"
+#include "grid_vision_fusion/detection/kitti_results.h"
+#include "tiny_darknet.h"
 
 namespace grid_vision_fusion
 {
@@ -103,6 +111,114 @@ TEST(KittiLabelsTest, MissingFileIsNamed)
   {
     EXPECT_NE(std::string(e.what()).find("999999.txt"), std::string::npos) << e.what();
   }
+}
+
+void expectSameLabel(const KittiObjectLabel& a, const KittiObjectLabel& b)
+{
+  EXPECT_EQ(a.type, b.type);
+  EXPECT_EQ(a.truncated, b.truncated);
+  EXPECT_EQ(a.occluded, b.occluded);
+  const float as[] = {a.alpha, a.left,   a.top, a.right, a.bottom, a.height,
+                      a.width, a.length, a.x,   a.y,     a.z,      a.rotation_y};
+  const float bs[] = {b.alpha, b.left,   b.top, b.right, b.bottom, b.height,
+                      b.width, b.length, b.x,   b.y,     b.z,      b.rotation_y};
+  for (std::size_t i = 0; i < 12; ++i)
+  {
+    EXPECT_EQ(as[i], bs[i]) << "field " << i + 4;  // exactly: the shortest form reads back the same float
+  }
+  EXPECT_EQ(a.score, b.score);
+}
+
+TEST(KittiLabelsTest, FormattedLinesParseBackExactly)
+{
+  const auto labels = readKittiLabels(kLabelDir + "/label_2/000001.txt");
+  KittiObjectLabel awkward;  // floats without a short decimal form, a score, extreme magnitudes
+  awkward.type = "Person_sitting";
+  awkward.truncated = 1.F / 3.F;
+  awkward.occluded = 3;
+  awkward.alpha = -3.14159265F;
+  awkward.left = 0.1F;
+  awkward.top = 1e-7F;
+  awkward.right = 1241.999F;
+  awkward.bottom = 374.5F;
+  awkward.x = -1e30F;
+  awkward.score = std::nextafter(0.5F, 1.F);
+  std::vector<KittiObjectLabel> all = labels;
+  all.push_back(awkward);
+  std::string text;
+  for (const KittiObjectLabel& label : all)
+  {
+    text += formatKittiLabel(label) + "\n";
+  }
+  std::istringstream input(text);
+  const auto parsed = parseKittiLabels(input, "formatted");
+  ASSERT_EQ(parsed.size(), all.size());
+  for (std::size_t i = 0; i < all.size(); ++i)
+  {
+    expectSameLabel(parsed[i], all[i]);
+  }
+  EXPECT_EQ(formatKittiLabel(labels[0]),
+            "Truck 0 0 -1.57 599.41 156.4 629.75 189.25 2.85 2.63 12.34 0.47 1.49 69.44 -1.56");
+}
+
+TEST(KittiLabelsTest, FormatRefusesWhatWouldNotParse)
+{
+  KittiObjectLabel label;
+  label.type = "traffic light";
+  EXPECT_THROW(formatKittiLabel(label), std::invalid_argument);
+  label.type = "";
+  EXPECT_THROW(formatKittiLabel(label), std::invalid_argument);
+  label.type = "Car";
+  label.left = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(formatKittiLabel(label), std::invalid_argument);
+}
+
+TEST(KittiLabelsTest, WriteReplacesTheFileAtOnceAndNamesAFailure)
+{
+  const std::string dir = test::makeTempDirectory();
+  const std::string path = dir + "/000003.txt";
+  std::ofstream(path) << "an earlier file\n";
+  KittiObjectLabel label;
+  label.type = "Car";
+  label.right = 10.F;
+  label.bottom = 5.F;
+  writeKittiLabels(path, {label, label});
+  EXPECT_EQ(readKittiLabels(path).size(), 2U);
+  writeKittiLabels(path, {});
+  std::ifstream written(path);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(written), std::istreambuf_iterator<char>()), "");
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  try
+  {
+    writeKittiLabels(dir + "/no_such_folder/000003.txt", {label});
+    FAIL() << "no error for a folder that does not exist";
+  }
+  catch (const KittiLabelError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(dir + "/no_such_folder/000003.txt"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(KittiResultsTest, LabelsBecomeKittiTypes)
+{
+  EXPECT_EQ(kittiTypeOfLabel("car"), "Car");
+  EXPECT_EQ(kittiTypeOfLabel("pedestrian"), "Pedestrian");
+  EXPECT_EQ(kittiTypeOfLabel("PERSON_SITTING"), "Person_sitting");
+  EXPECT_EQ(kittiTypeOfLabel("Van"), "Van");
+  EXPECT_EQ(kittiTypeOfLabel("traffic light"), "traffic_light");
+  EXPECT_EQ(kittiTypeOfLabel("person"), "person");
+  EXPECT_THROW(kittiTypeOfLabel(""), std::invalid_argument);
+}
+
+TEST(KittiResultsTest, ADetectionIsA2dResultLineWithUnknown3dFields)
+{
+  Detection detection;
+  detection.label = "cyclist";
+  detection.score = 0.8125F;
+  detection.box = {10.5F, 20.25F, 30.F, 60.F};
+  EXPECT_EQ(formatKittiLabel(kittiResultOf(detection)),
+            "Cyclist -1 -1 -10 10.5 20.25 30 60 -1 -1 -1 -1000 -1000 -1000 -10 0.8125");
 }
 
 }  // namespace

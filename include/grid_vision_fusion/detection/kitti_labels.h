@@ -1,4 +1,4 @@
-// Reader of KITTI object label files (the 3-D object benchmark's label_2 format and the
+// Reader and writer of KITTI object label files (the 3-D object benchmark's label_2 format and the
 // detection results submitted to it): one object per line,
 //   type truncated occluded alpha left top right bottom height width length x y z rotation_y [score]
 #pragma once
@@ -55,5 +55,19 @@ std::vector<std::string> splitFields(const std::string& line);
 /// @throws KittiLabelError when the file cannot be opened ("<path>: cannot open ...") or a
 ///         line is malformed (see parseKittiLabels()).
 std::vector<KittiObjectLabel> readKittiLabels(const std::string& path);
+
+/// One label as a line of a KITTI label file, without the newline: the 15 fields, then the
+/// score as a 16th when it is set. Numbers are written in the shortest form that reads back to
+/// the same float, so parseKittiLabels() of the line gives `label` back exactly.
+/// @throws std::invalid_argument when the type is empty or holds whitespace, or a number is
+///         not finite (the line would not parse).
+std::string formatKittiLabel(const KittiObjectLabel& label);
+
+/// Writes `labels` as the KITTI label file `path`, one formatKittiLabel() line each (an empty
+/// file for none). The file is written as `path`.tmp and renamed once complete, so that a
+/// reader never sees half a file and a failure leaves an existing file as it was.
+/// @throws KittiLabelError naming the file when it cannot be written; std::invalid_argument
+///         as formatKittiLabel().
+void writeKittiLabels(const std::string& path, const std::vector<KittiObjectLabel>& labels);
 
 }  // namespace grid_vision_fusion
