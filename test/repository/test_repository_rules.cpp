@@ -579,4 +579,41 @@ TEST(RepositoryRules, NoSourceFolderHoldsMoreThan10Files)
   EXPECT_TRUE(crowded.empty()) << "folders with more than " << kMaxFolderFiles << " .cpp/.h files" << crowded;
 }
 
+/// Longest table row of the documentation, in characters: a row that grows past it has become
+/// a lab notebook (every re-measurement appended to its cell; issue 27).
+constexpr std::size_t kMaxTableRowCharacters = 400;
+
+TEST(RepositoryRules, NoTableRowOfTheDocsIsLongerThan400Characters)
+{
+  const auto files = repositoryFiles({"README.md", "doc"}, {".md"});
+  ASSERT_GT(files.size(), 10U);
+  std::string long_rows;
+  std::size_t rows = 0;
+  for (const fs::path& file : files)
+  {
+    std::istringstream text(readFile(file));
+    std::string line;
+    for (std::size_t number = 1; std::getline(text, line); ++number)
+    {
+      if (line.rfind("|", 0) != 0)
+      {
+        continue;
+      }
+      ++rows;
+      // Characters, not bytes: UTF-8 continuation bytes do not count.
+      const auto characters = static_cast<std::size_t>(std::count_if(
+          line.begin(), line.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+      if (characters > kMaxTableRowCharacters)
+      {
+        long_rows += "\n  " + fs::relative(file, kSource).string() + ":" + std::to_string(number) + " (" +
+                     std::to_string(characters) + " characters)";
+      }
+    }
+  }
+  EXPECT_GT(rows, 200U);
+  EXPECT_TRUE(long_rows.empty()) << "table rows longer than " << kMaxTableRowCharacters
+                                 << " characters: one figure per cell, the history in CHANGELOG.md"
+                                 << long_rows;
+}
+
 }  // namespace
