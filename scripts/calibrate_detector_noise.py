@@ -271,27 +271,20 @@ def match_frame(detections, labels):
     detections = sorted(detections, key=lambda d: -d["score"])
     for d in detections:
         d["kind"] = None
-        best, best_iou = None, 0.5
-        for o in objects:
-            if o["found"] is None:
-                overlap = iou(d["box"], o["box"])
-                if overlap >= best_iou:
-                    best, best_iou = o, overlap
-        if best is not None:
-            best["found"], best["how"] = d, "full"
-            d["kind"], d["iou"] = "full", best_iou
-    for d in detections:
-        if d["kind"] is not None:
-            continue
-        best, best_iou = None, 0.1
-        for o in objects:
-            if o["found"] is None:
-                overlap = iou(d["box"], o["box"])
-                if overlap >= best_iou:
-                    best, best_iou = o, overlap
-        if best is not None:
-            best["found"], best["how"] = d, "partial"
-            d["kind"], d["iou"] = "partial", best_iou
+    # Full boxes first (IoU >= 0.5), then what is left as partial boxes (IoU >= 0.1).
+    for kind, min_iou in (("full", 0.5), ("partial", 0.1)):
+        for d in detections:
+            if d["kind"] is not None:
+                continue
+            best, best_iou = None, min_iou
+            for o in objects:
+                if o["found"] is None:
+                    overlap = iou(d["box"], o["box"])
+                    if overlap >= best_iou:
+                        best, best_iou = o, overlap
+            if best is not None:
+                best["found"], best["how"] = d, kind
+                d["kind"], d["iou"] = kind, best_iou
     for d in detections:
         if d["kind"] is not None:
             continue

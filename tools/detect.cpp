@@ -4,7 +4,6 @@
 // (run_pipeline --backend replay, kitti_replay.launch replay_directory:=). See doc/tools/detect.md.
 //
 //   rosrun grid_vision_fusion detect --model M [options] --output DIR IMAGES...
-#include <ros/package.h>
 #include <unistd.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -24,6 +23,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/cli/machine_info.h"
+#include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/detection/kitti_results.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
@@ -221,18 +221,6 @@ bool parseArguments(int argc, char** argv, Options& o)
   return true;
 }
 
-std::string packagePath(const std::string& what)
-{
-  const std::string package = ros::package::getPath("grid_vision_fusion");
-  if (package.empty())
-  {
-    throw std::runtime_error(
-        "cannot find the package grid_vision_fusion (source its setup.bash) for the default " + what +
-        "; give it explicitly");
-  }
-  return package;
-}
-
 bool isImageFile(const fs::path& path)
 {
   std::string extension = path.extension().string();
@@ -347,13 +335,14 @@ double medianOf(std::vector<double> values)
 gvf::YoloDetectorConfig detectorConfig(const Options& o)
 {
   const std::string config_path =
-      o.config.empty() ? packagePath("--config") + "/config/yolo_detector.yaml" : o.config;
+      o.config.empty() ? gvf::packagePath("--config") + "/config/yolo_detector.yaml" : o.config;
   gvf::YamlParamSource source = gvf::YamlParamSource::fromFile(config_path);
   source.set("backend", std::string("opencv_dnn"));
   source.set("model", o.model);
   source.set("weights", o.weights);
-  source.set("class_names", o.class_names.empty() ? packagePath("--class-names") + "/models/yolo/coco.names"
-                                                  : o.class_names);
+  source.set("class_names", o.class_names.empty()
+                                ? gvf::packagePath("--class-names") + "/models/yolo/coco.names"
+                                : o.class_names);
   if (o.input)
   {
     source.set("input_width", o.input->width);

@@ -2,7 +2,6 @@
 // the machine allows, deterministically, with the nodelets' YAML configuration files.
 //
 //   rosrun grid_vision_fusion run_pipeline --bag IN.bag --output OUT.bag [options]
-#include <ros/package.h>
 #include <rosbag/bag.h>
 #include <unistd.h>
 
@@ -16,6 +15,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/cli/machine_info.h"
+#include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/offline/pipeline.h"
@@ -140,22 +140,10 @@ void applyParam(const std::string& param, const std::map<std::string, gvf::YamlP
   node->second->set(param.substr(slash + 1, eq - slash - 1), typed);
 }
 
-std::string packagePath(const std::string& what)
-{
-  const std::string package = ros::package::getPath("grid_vision_fusion");
-  if (package.empty())
-  {
-    throw std::runtime_error(
-        "cannot find the package grid_vision_fusion (source its setup.bash) for the default " + what +
-        "; give it explicitly");
-  }
-  return package;
-}
-
 int run(const Options& o)
 {
   const std::string config_dir =
-      o.config_dir.empty() ? packagePath("--config-dir") + "/config" : o.config_dir;
+      o.config_dir.empty() ? gvf::packagePath("--config-dir") + "/config" : o.config_dir;
   gvf::YamlParamSource grid = gvf::YamlParamSource::fromFile(
       o.grid_config.empty() ? config_dir + "/dynamic_grid.yaml" : o.grid_config);
   gvf::YamlParamSource detector = gvf::YamlParamSource::fromFile(
@@ -173,10 +161,11 @@ int run(const Options& o)
   gvf::readParam(detector, "backend", backend);
   if (backend == "opencv_dnn")
   {
-    detector.set("model", o.model.empty() ? packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model);
+    detector.set("model",
+                 o.model.empty() ? gvf::packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model);
     detector.set("weights", o.weights);
     detector.set("class_names", o.class_names.empty()
-                                    ? packagePath("--class-names") + "/models/yolo/coco.names"
+                                    ? gvf::packagePath("--class-names") + "/models/yolo/coco.names"
                                     : o.class_names);
   }
   detector.set("replay/directory", o.replay_directory);

@@ -59,6 +59,13 @@ int toInt(const std::string& token, std::size_t field, const std::string& source
 
 }  // namespace
 
+std::string lowerCase(std::string text)
+{
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
 std::vector<std::string> splitFields(const std::string& line)
 {
   std::istringstream fields(line);

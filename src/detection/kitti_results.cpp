@@ -8,17 +8,6 @@
 
 namespace grid_vision_fusion
 {
-namespace
-{
-std::string lowerCase(std::string text)
-{
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-}  // namespace
-
 std::string kittiTypeOfLabel(const std::string& label)
 {
   if (label.empty())

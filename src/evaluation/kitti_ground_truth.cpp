@@ -16,13 +16,6 @@ namespace grid_vision_fusion
 {
 namespace
 {
-std::string lowerCase(std::string text)
-{
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
 std::string parentOf(const std::string& dir)
 {
   std::filesystem::path path(dir);

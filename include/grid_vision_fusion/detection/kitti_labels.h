@@ -51,6 +51,9 @@ std::vector<KittiObjectLabel> parseKittiLabels(std::istream& input, const std::s
 /// The whitespace-separated fields of one line of a KITTI text file.
 std::vector<std::string> splitFields(const std::string& line);
 
+/// `text` in lower case (ASCII): KITTI types and labels compare without regard to case.
+std::string lowerCase(std::string text);
+
 /// Reads the KITTI label file at `path`.
 /// @throws KittiLabelError when the file cannot be opened ("<path>: cannot open ...") or a
 ///         line is malformed (see parseKittiLabels()).
