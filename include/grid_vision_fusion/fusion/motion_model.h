@@ -21,7 +21,9 @@
 //   - the dynamic share r̄ of the object's cells (mean of P(D) / (P(S) + P(D))), read as a vote
 //     that errs with probability grid_error: L(D) : L(S) = (ε + (1 − 2ε) r̄) : (1 − ε − (1 − 2ε) r̄);
 //   - the cells' velocity ĝ with the spread of their particles Σ (the Mahalanobis test of Nuss et
-//     al., IJRR 2018, as a likelihood): t(ĝ; 0, Σ) under S, t(ĝ; v_D, Σ + P_v) under D.
+//     al., IJRR 2018, as a likelihood): t(ĝ; 0, Σ) under S, t(ĝ; v_D, Σ + P_v) under D, with D's
+//     velocity v_D and covariance P_v as predicted before this image; ĝ then updates v_D (noise
+//     Σ / r̄), so that a mover's particles start its velocity before its centres can.
 // P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S).
 #pragma once
 
