@@ -439,7 +439,8 @@ TEST(Fuse, GridEvidenceComesFromTheClustersCells)
   bare.p_dynamic.clear();
   bare.v_var_x.clear();
   bare.v_var_y.clear();
-  const FusedObject& b = fuse({kBox}, bare.view(), FusionConfig{}).objects.at(0);
+  const FusionResult bare_result = fuse({kBox}, bare.view(), FusionConfig{});
+  const FusedObject& b = bare_result.objects.at(0);
   EXPECT_NEAR(b.grid.dynamic_share, 0.2, 1e-12);
   EXPECT_FALSE(b.grid.has_velocity);
   EXPECT_DOUBLE_EQ(gridEvidence(bare.view(), {}).dynamic_share, 0.5);
