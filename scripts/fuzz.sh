@@ -6,13 +6,14 @@
 #
 # Installs clang-14 and its runtime libraries (libFuzzer) when missing, configures the package
 # with clang-14 and -DGVF_FUZZ=ON in $GVF_FUZZ_DIR/build (default GVF_FUZZ_DIR:
-# ~/.cache/grid_vision_fusion/fuzz) and builds the fuzz_<harness> target of every harness (or of
-# those named): the package libraries it links with -fsanitize=fuzzer-no-link,address,undefined,
-# the harness with -fsanitize=fuzzer (fuzz/fuzz.cmake). Then it makes each seed corpus from
-# test/data (copied there, the repository is never written), runs the harnesses two at a time
-# for `seconds` each (default 600) and prints executions, seconds, corpus size and findings per
-# harness. Findings (crash-*, leak-*, timeout-*, oom-* files; slow-unit-* ones are listed, not
-# counted) are left in $GVF_FUZZ_DIR/<harness>/findings. Exits non-zero on any finding.
+# ${XDG_CACHE_HOME:-~/.cache}/grid_vision_fusion/fuzz) and builds the fuzz_<harness> target of
+# every harness (or of those named): the package libraries it links with
+# -fsanitize=fuzzer-no-link,address,undefined, the harness with -fsanitize=fuzzer
+# (fuzz/fuzz.cmake). Then it makes each seed corpus from test/data (copied there, the repository
+# is never written), runs the harnesses two at a time for `seconds` each (default 600) and prints
+# executions, seconds, corpus size and findings per harness. Findings (crash-*, leak-*, timeout-*,
+# oom-* files; slow-unit-* ones are listed, not counted) are left in
+# $GVF_FUZZ_DIR/<harness>/findings. Exits non-zero on any finding.
 #
 # --ci (.ci/run): every harness, 10 s each unless `seconds` is given, and a last line
 # `N passed, M failed` (a harness passes when its run found nothing; a failed build is one failure).
@@ -26,7 +27,7 @@ if [ "${1:-}" = --ci ]; then
 fi
 SECONDS_EACH=${1:-$((CI ? 10 : 600))}
 shift || true
-WORK=${GVF_FUZZ_DIR:-$HOME/.cache/grid_vision_fusion/fuzz}
+WORK=${GVF_FUZZ_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/grid_vision_fusion/fuzz}
 BUILD=$WORK/build
 JOBS=${GVF_JOBS:-$(nproc)}
 ALL_HARNESSES=$(cd "$REPO/fuzz" && printf '%s\n' */fuzz_*.cpp | sed 's#^.*/fuzz_##; s/\.cpp$//' | sort)
