@@ -10,7 +10,8 @@ confusion with the moving objects split by truth speed band (0.5-1, 1-3, > 3 m/s
 speed and heading errors (median, 90th percentile), the headline figures of issue 11 (moving
 objects >= 1 m/s found dynamic, overall and per class; static objects found static) and of
 issue 12 (errors over all classes, motion right, id switches per 100 matched object-frames,
-MOTA, IDF1, motion flickers).
+MOTA, IDF1, motion flickers), and how well the published P(dynamic) is calibrated (when
+matches.csv carries it: a reliability table, the Brier score, the expected calibration error).
 
 usage: suite_report.py --output DIR --scenario NAME EVAL_DIR SECONDS [--scenario ...]
                        [--wall-time S] [--cpu TEXT] [--thresholds FILE] [--junit FILE]
@@ -35,6 +36,8 @@ HEADLINE_CLASSES = ("car", "van", "truck", "pedestrian", "cyclist")
 CSV_COLUMNS = ("frame", "label", "truth_motion", "predicted_motion", "truth_band", "truth_speed_mps",
                "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad", "truth_id",
                "track_id")
+OPTIONAL_CSV_COLUMNS = ("p_dynamic",)  # evaluate writes it since issue 26's follow-up; older outputs lack it
+CALIBRATION_BINS = 10
 THRESHOLD_KEYS = {"min_moving_dynamic", "min_moving_dynamic_per_class", "min_static_static",
                   "min_class_matches", "max_dynamic_latency_p90_s"}
 
@@ -62,9 +65,9 @@ def read_matches(path):
     try:
         with open(path, newline="") as f:
             reader = csv.DictReader(f)
-            if tuple(reader.fieldnames or ()) != CSV_COLUMNS:
-                raise InputError("%s: unexpected columns %s (expected %s)" % (path, reader.fieldnames,
-                                                                             ",".join(CSV_COLUMNS)))
+            if tuple(reader.fieldnames or ()) not in (CSV_COLUMNS, CSV_COLUMNS + OPTIONAL_CSV_COLUMNS):
+                raise InputError("%s: unexpected columns %s (expected %s[,%s])" % (
+                    path, reader.fieldnames, ",".join(CSV_COLUMNS), ",".join(OPTIONAL_CSV_COLUMNS)))
             rows = []
             for line, row in enumerate(reader, start=2):
                 if row["truth_motion"] not in MOTIONS or row["predicted_motion"] not in MOTIONS \
@@ -183,6 +186,44 @@ def tracking_summary(parts):
     t["idf1"] = (2.0 * t["idtp"] / (2 * t["idtp"] + t["idfp"] + t["idfn"]) if t["idtp"] else 0.0)
     t["id_switches_per_100"] = 100.0 * t["id_switches"] / t["matches"] if t["matches"] else None
     return t
+
+
+def calibration(rows):
+    """Reliability of the published P(dynamic) over the matches with a static or dynamic truth and a
+    P(dynamic): per bin of width 1 / CALIBRATION_BINS the matches, the truly moving ones and the mean
+    P(dynamic); the Brier score and the expected calibration error (as evaluate's report)."""
+    bins = [{"low": b / CALIBRATION_BINS, "high": (b + 1) / CALIBRATION_BINS, "count": 0, "dynamic": 0, "p_sum": 0.0}
+            for b in range(CALIBRATION_BINS)]
+    squared, total = 0.0, 0
+    for row in rows:
+        p = number(row.get("p_dynamic") or "")
+        if row["truth_motion"] not in ("static", "dynamic") or p is None or not 0.0 <= p <= 1.0:
+            continue
+        truth = 1.0 if row["truth_motion"] == "dynamic" else 0.0
+        b = bins[min(int(p * CALIBRATION_BINS), CALIBRATION_BINS - 1)]
+        b["count"] += 1
+        b["dynamic"] += int(truth)
+        b["p_sum"] += p
+        squared += (p - truth) ** 2
+        total += 1
+    for b in bins:
+        b["mean_p"] = b.pop("p_sum") / b["count"] if b["count"] else None
+    if not total:
+        return {"matches": 0, "brier": None, "expected_calibration_error": None, "bins": bins}
+    ece = sum(b["count"] / total * abs(b["mean_p"] - b["dynamic"] / b["count"]) for b in bins if b["count"])
+    return {"matches": total, "brier": squared / total, "expected_calibration_error": ece, "bins": bins}
+
+
+def calibration_table(c):
+    lines = ["Matches with a static or dynamic truth, by the published P(dynamic): a calibrated probability has "
+             "as many truly moving objects in a bin as its mean P(dynamic) says. Brier score %.4f, expected "
+             "calibration error %.4f, %d matches." % (c["brier"], c["expected_calibration_error"], c["matches"]), "",
+             "| P(dynamic) | matches | mean P(dynamic) | truly moving [%] |", "|---|---|---|---|"]
+    for b in c["bins"]:
+        lines.append("| %.1f-%.1f | %d | %s | %s |" % (
+            b["low"], b["high"], b["count"], "%.3f" % b["mean_p"] if b["count"] else "-",
+            "%.1f" % (100.0 * b["dynamic"] / b["count"]) if b["count"] else "-"))
+    return lines
 
 
 def motion_right(tallies):
@@ -438,7 +479,7 @@ def main(argv):
               "headline": overall_headline,
               "overall": {label: t.to_json() for label, t in sorted(overall.items())},
               "all_classes": overall_all.to_json(), "motion_right": motion_right(overall),
-              "tracking": overall_tracking,
+              "tracking": overall_tracking, "p_dynamic_calibration": calibration(overall_rows),
               "scenarios": [], "thresholds": thresholds,
               "checks": [{"name": n, "passed": ok, "message": m} for n, ok, m in checks]}
     md = ["# Scenario suite report", "",
@@ -466,6 +507,8 @@ def main(argv):
                "Per moving object (truth at 1 m/s or more in a matched frame): the time from that first "
                "match to its first match reported dynamic; never dynamic counts as infinite.", ""]
         md += latency_table(overall_tracking["latency"])
+    if report["p_dynamic_calibration"]["matches"]:
+        md += ["", "## P(dynamic) calibration", ""] + calibration_table(report["p_dynamic_calibration"])
     md += ["", "## Per scenario", "",
            "| scenario | matches | moving >= 1 m/s found dynamic [%] | static found static [%] | "
            "moving 0.5-1 m/s found dynamic [%] | wall time [s] |", "|---|---|---|---|---|---|"]

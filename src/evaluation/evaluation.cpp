@@ -392,6 +392,7 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
       matched.longitudinal_m = gt.longitudinal_m;
       matched.truth_id = gt.track_id;
       matched.track_id = det.track_id;
+      matched.p_dynamic = det.p_dynamic;
       matched.has_state = det.has_state && gt.has_state;
       matched.position_error_m = std::nan("");
       matched.speed_error_mps = std::nan("");
@@ -416,7 +417,48 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
   result.position_error_m = errorStats(std::move(position_errors));
   result.speed_error_mps = errorStats(std::move(speed_errors));
   result.heading_error_rad = errorStats(std::move(heading_errors));
+  result.p_dynamic_calibration = probabilityCalibration(result.matched_objects);
   return result;
+}
+
+ProbabilityCalibration probabilityCalibration(const std::vector<MatchedObject>& matches)
+{
+  ProbabilityCalibration c;
+  std::array<double, ProbabilityCalibration::kBins> p_sum{};
+  double squared_error_sum = 0.0;
+  for (const MatchedObject& m : matches)
+  {
+    const bool known = m.truth_motion == Motion::kStatic || m.truth_motion == Motion::kDynamic;
+    if (!known || !(m.p_dynamic >= 0.0 && m.p_dynamic <= 1.0))
+    {
+      continue;
+    }
+    const auto bin = std::min(static_cast<std::size_t>(m.p_dynamic * ProbabilityCalibration::kBins),
+                              ProbabilityCalibration::kBins - 1);
+    const double truth = m.truth_motion == Motion::kDynamic ? 1.0 : 0.0;
+    ++c.count[bin];
+    c.dynamic[bin] += m.truth_motion == Motion::kDynamic ? 1 : 0;
+    p_sum[bin] += m.p_dynamic;
+    squared_error_sum += (m.p_dynamic - truth) * (m.p_dynamic - truth);
+    ++c.total;
+  }
+  if (c.total == 0)
+  {
+    return c;
+  }
+  c.brier = squared_error_sum / static_cast<double>(c.total);
+  for (std::size_t b = 0; b < ProbabilityCalibration::kBins; ++b)
+  {
+    if (c.count[b] == 0)
+    {
+      continue;
+    }
+    const auto n = static_cast<double>(c.count[b]);
+    c.mean_p[b] = p_sum[b] / n;
+    c.expected_calibration_error +=
+        n / static_cast<double>(c.total) * std::abs(c.mean_p[b] - static_cast<double>(c.dynamic[b]) / n);
+  }
+  return c;
 }
 
 void TrackingEvaluationConfig::validate() const

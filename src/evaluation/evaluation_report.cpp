@@ -129,6 +129,21 @@ std::string jsonLatency(const std::vector<DynamicLatency>& latencies)
   return out + "]";
 }
 
+std::string jsonCalibration(const ProbabilityCalibration& c)
+{
+  std::ostringstream out;
+  out << "{\"matches\": " << c.total << ", \"brier\": " << number(c.brier)
+      << ", \"expected_calibration_error\": " << number(c.expected_calibration_error) << ", \"bins\": [";
+  for (std::size_t b = 0; b < ProbabilityCalibration::kBins; ++b)
+  {
+    out << (b ? ", " : "") << "{\"low\": " << number(0.1 * static_cast<double>(b), 1)
+        << ", \"high\": " << number(0.1 * static_cast<double>(b + 1), 1) << ", \"count\": " << c.count[b]
+        << ", \"dynamic\": " << c.dynamic[b] << ", \"mean_p\": " << number(c.mean_p[b]) << "}";
+  }
+  out << "]}";
+  return out.str();
+}
+
 std::string jsonCounts(const MotionCounts& counts)
 {
   return "[" + std::to_string(counts[0]) + ", " + std::to_string(counts[1]) + ", " +
@@ -220,6 +235,31 @@ std::string fileSafe(const std::string& name)
   }
   return out;
 }
+
+/// The reliability table of P(dynamic), when some match has one.
+void calibrationMarkdown(std::ostream& out, const ProbabilityCalibration& c)
+{
+  if (c.total == 0)
+  {
+    return;
+  }
+  out << "\n## P(dynamic) calibration\n\nMatches with a static or dynamic truth, by the published "
+         "P(dynamic): a calibrated probability has as many truly moving objects in a bin as its mean "
+         "P(dynamic) says. Brier score "
+      << number(c.brier, 4) << ", expected calibration error " << number(c.expected_calibration_error, 4)
+      << ", " << c.total << " matches.\n\n| P(dynamic) | matches | mean P(dynamic) | truly moving [%] |\n"
+      << "|---|---|---|---|\n";
+  for (std::size_t b = 0; b < ProbabilityCalibration::kBins; ++b)
+  {
+    out << "| " << number(0.1 * static_cast<double>(b), 1) << "-"
+        << number(0.1 * static_cast<double>(b + 1), 1) << " | " << c.count[b] << " | "
+        << (c.count[b] ? number(c.mean_p[b], 3) : std::string("-")) << " | "
+        << (c.count[b] ? percent(static_cast<double>(c.dynamic[b]) / static_cast<double>(c.count[b]))
+                       : std::string("-"))
+        << " |\n";
+  }
+}
+
 }  // namespace
 
 std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config)
@@ -271,7 +311,8 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
   }
   out << (class_index ? "\n  " : "") << "},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
       << ",\n  \"speed_error_mps\": " << jsonStats(result.speed_error_mps)
-      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad);
+      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad)
+      << ",\n  \"p_dynamic_calibration\": " << jsonCalibration(result.p_dynamic_calibration);
   if (result.tracking)
   {
     const TrackingMetrics& t = *result.tracking;
@@ -330,6 +371,7 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
   row("position [m]", result.position_error_m, 1.0, 2);
   row("speed [m/s]", result.speed_error_mps, 1.0, 2);
   row("heading [deg] (dynamic only)", result.heading_error_rad, 180.0 / M_PI, 1);
+  calibrationMarkdown(out, result.p_dynamic_calibration);
   if (result.tracking)
   {
     const TrackingMetrics& t = *result.tracking;
@@ -366,7 +408,7 @@ std::string matchesCsv(const EvaluationResult& result)
   static const char* const kMotion[] = {"unknown", "static", "dynamic"};
   std::ostringstream out;
   out << "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
-         "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id\n";
+         "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id,p_dynamic\n";
   for (const MatchedObject& m : result.matched_objects)
   {
     out << m.frame << ',' << m.label << ',' << kMotion[static_cast<std::size_t>(m.truth_motion)] << ','
@@ -374,7 +416,7 @@ std::string matchesCsv(const EvaluationResult& result)
         << number(m.truth_speed_mps, 3) << ',' << number(m.longitudinal_m, 2) << ','
         << csvNumber(m.position_error_m, 3) << ',' << csvNumber(m.speed_error_mps, 3) << ','
         << csvNumber(m.heading_error_rad, 4) << ',' << idField(m.truth_id) << ',' << idField(m.track_id)
-        << '\n';
+        << ',' << (m.p_dynamic >= 0.0 ? csvNumber(m.p_dynamic, 4) : std::string()) << '\n';
   }
   return out.str();
 }

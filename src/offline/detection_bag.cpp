@@ -59,6 +59,7 @@ EvalObject toEvalObject(const DetectedObject& object, const std::string& frame_n
   o.score = object.score;
   o.has_state = true;
   o.track_id = object.id;
+  o.p_dynamic = object.p_dynamic;
   o.x = object.position.x;
   o.y = object.position.y;
   o.vx = object.velocity.x;

@@ -3,6 +3,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -81,13 +82,76 @@ TEST(EvaluationReport, MatchesCsv)
   det.motion = Motion::kStatic;
   det.x = 1.0;
   det.vx = 0.0;
-  const EvaluationResult result = evaluate({gt}, {det}, EvaluationConfig{});
+  EvalObject tracked = det;  // a DetectedObject's: its P(dynamic) in the last field
+  tracked.frame = "000004";
+  tracked.p_dynamic = 0.25;
+  EvalObject tracked_gt = gt;
+  tracked_gt.frame = "000004";
+  const EvaluationResult result = evaluate({gt, tracked_gt}, {det, tracked}, EvaluationConfig{});
   EXPECT_EQ(matchesCsv(result),
             "frame,label,truth_motion,predicted_motion,truth_band,truth_speed_mps,longitudinal_m,"
-            "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id\n"
-            "000003,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,,7,\n");
+            "position_error_m,speed_error_mps,heading_error_rad,truth_id,track_id,p_dynamic\n"
+            "000003,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,,7,,\n"
+            "000004,cyclist,dynamic,static,>3,4.000,12.50,1.000,4.000,,7,,0.2500\n");
   EXPECT_EQ(matchesCsv(EvaluationResult{}).find('\n') + 1,
             matchesCsv(EvaluationResult{}).size());  // header only
+}
+
+TEST(ProbabilityCalibration, BinsBrierScoreAndCalibrationError)
+{
+  auto match = [](Motion truth, double p)
+  {
+    MatchedObject m;
+    m.truth_motion = truth;
+    m.p_dynamic = p;
+    return m;
+  };
+  const std::vector<MatchedObject> matches = {
+      match(Motion::kStatic, 0.05),         match(Motion::kStatic, 0.15),
+      match(Motion::kDynamic, 0.15),        match(Motion::kDynamic, 1.0),
+      match(Motion::kDynamic, 0.95),        match(Motion::kUnknown, 0.5),  // truth unknown: left out
+      match(Motion::kDynamic, -1.0),  // no P(dynamic) (a label file): left out
+      match(Motion::kStatic, std::nan("")), match(Motion::kStatic, 1.5)};
+  const ProbabilityCalibration c = probabilityCalibration(matches);
+  EXPECT_EQ(c.total, 5U);
+  EXPECT_EQ(c.count[0], 1U);
+  EXPECT_EQ(c.dynamic[0], 0U);
+  EXPECT_EQ(c.count[1], 2U);
+  EXPECT_EQ(c.dynamic[1], 1U);
+  EXPECT_EQ(c.count[9], 2U);  // 1.0 falls in the last bin
+  EXPECT_EQ(c.dynamic[9], 2U);
+  EXPECT_EQ(c.count[5], 0U);
+  EXPECT_NEAR(c.mean_p[1], 0.15, 1e-12);
+  EXPECT_NEAR(c.mean_p[9], 0.975, 1e-12);
+  EXPECT_NEAR(c.brier, (0.05 * 0.05 + 0.15 * 0.15 + 0.85 * 0.85 + 0.05 * 0.05) / 5.0, 1e-12);
+  EXPECT_NEAR(c.expected_calibration_error, 0.2 * 0.05 + 0.4 * 0.35 + 0.4 * 0.025, 1e-12);
+
+  const ProbabilityCalibration none = probabilityCalibration({match(Motion::kDynamic, -1.0)});
+  EXPECT_EQ(none.total, 0U);
+  EXPECT_EQ(none.brier, 0.0);
+}
+
+TEST(EvaluationReport, CalibrationInTheReportWhenTheDetectionsHaveAProbability)
+{
+  EvalObject gt = object("000001", "car", Motion::kDynamic, kA, 1.F);
+  EvalObject det = gt;
+  det.p_dynamic = 0.82;
+  EvaluationResult result = evaluate({gt}, {det}, EvaluationConfig{});
+  EXPECT_EQ(result.p_dynamic_calibration.total, 1U);
+  EXPECT_EQ(result.p_dynamic_calibration.count[8], 1U);
+  const std::string md = reportMarkdown(result, EvaluationConfig{});
+  EXPECT_NE(md.find("## P(dynamic) calibration"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 0.8-0.9 | 1 | 0.820 | 100.0 |"), std::string::npos) << md;
+  const std::string json = metricsJson(result, EvaluationConfig{});
+  EXPECT_NE(json.find("\"p_dynamic_calibration\": {\"matches\": 1, \"brier\": 0.032400"), std::string::npos)
+      << json;
+  EXPECT_NE(json.find("{\"low\": 0.8, \"high\": 0.9, \"count\": 1, \"dynamic\": 1, \"mean_p\": 0.820000}"),
+            std::string::npos)
+      << json;
+
+  det.p_dynamic = -1.0;  // a label file: no probability, no section
+  result = evaluate({gt}, {det}, EvaluationConfig{});
+  EXPECT_EQ(reportMarkdown(result, EvaluationConfig{}).find("calibration"), std::string::npos);
 }
 
 TEST(EvaluationReport, MarkdownTables)

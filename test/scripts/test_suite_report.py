@@ -143,6 +143,39 @@ class SuiteReportTest(TempDirTest):
             json.dump({"tracking": {"matches": 1}}, f)
         self.assertEqual(self.run_report(args)[0], 1)
 
+    def test_p_dynamic_calibration_over_the_scenarios(self):
+        # Scenario a from evaluate without the p_dynamic column (older output): no probabilities.
+        # Scenario b with it: 0.05 static, 0.15 static and dynamic, 0.95 and 1.0 dynamic (bin 9 closed),
+        # an unknown truth and an empty field left out.
+        a = self.scenario("a", [row("car", "static", "static", "static")])
+        folder = os.path.join(self.tmp, "b")
+        os.makedirs(folder)
+        rows = [("static", "static", 0.05), ("static", "static", 0.15), ("dynamic", "1-3", 0.15),
+                ("dynamic", ">3", 0.95), ("dynamic", ">3", 1.0), ("unknown", "unknown", 0.5)]
+        with open(os.path.join(folder, "matches.csv"), "w") as f:
+            f.write(HEADER.rstrip("\n") + ",p_dynamic\n")
+            for truth, band, p in rows:
+                f.write("f,car,%s,static,%s,2.000,10.00,1.000,0.100,,3,4,%.4f\n" % (truth, band, p))
+            f.write("f,car,dynamic,static,>3,5.000,10.00,1.000,0.100,,3,4,\n")
+        status, out = self.run_report(a + ["--scenario", "b", folder, "12"])
+        self.assertEqual(status, 0)
+        with open(os.path.join(out, "suite_report.json")) as f:
+            c = json.load(f)["p_dynamic_calibration"]
+        self.assertEqual(c["matches"], 5)
+        self.assertEqual([(b["count"], b["dynamic"]) for b in c["bins"] if b["count"]], [(1, 0), (2, 1), (2, 2)])
+        self.assertAlmostEqual(c["bins"][9]["mean_p"], 0.975)
+        self.assertAlmostEqual(c["brier"], (0.05 ** 2 + 0.15 ** 2 + 0.85 ** 2 + 0.05 ** 2) / 5)
+        self.assertAlmostEqual(c["expected_calibration_error"], 0.2 * 0.05 + 0.4 * 0.35 + 0.4 * 0.025)
+        with open(os.path.join(out, "suite_report.md")) as f:
+            md = f.read()
+        self.assertIn("## P(dynamic) calibration", md)
+        self.assertIn("| 0.1-0.2 | 2 | 0.150 | 50.0 |", md)
+
+        # Only outputs without probabilities: no section.
+        status, out = self.run_report(a)
+        with open(os.path.join(out, "suite_report.md")) as f:
+            self.assertNotIn("calibration", f.read())
+
     def test_thresholds_pass_and_fail(self):
         args = self.two_scenarios()
         junit = os.path.join(self.tmp, "junit.xml")

@@ -39,6 +39,9 @@ struct EvalObject
   /// detection; −1 when unknown (label files). Only the tracking metrics use it.
   std::int64_t track_id = -1;
   double time_s = 0.0;  ///< time of the frame [s] (the tracking metrics' flicker window)
+  /// A detection's probability that it moves (DetectedObject.p_dynamic), [0, 1]; negative when
+  /// not given (label files, ground truth).
+  double p_dynamic = -1.0;
 };
 
 /// Parameters of evaluate().
@@ -115,7 +118,29 @@ struct MatchedObject
   double heading_error_rad = 0.0;  ///< NaN unless both are dynamic (as heading_error_rad below)
   std::int64_t truth_id = -1;      ///< the ground truth's track_id (tracklet), −1 when unknown
   std::int64_t track_id = -1;      ///< the detection's track_id (DetectedObject.id), −1 when unknown
+  double p_dynamic = -1.0;         ///< the detection's P(dynamic), negative when not given
 };
+
+/// Whether the published P(dynamic) is a probability: over the matches with a static or dynamic
+/// truth and a P(dynamic), in ten bins of P(dynamic) of width 0.1 (the last one closed), how
+/// many matches fall in each and how many of them truly move (a reliability diagram).
+struct ProbabilityCalibration
+{
+  static constexpr std::size_t kBins = 10;
+  std::array<std::size_t, kBins> count{};    ///< matches per bin
+  std::array<std::size_t, kBins> dynamic{};  ///< ... whose truth is dynamic
+  std::array<double, kBins> mean_p{};        ///< mean P(dynamic) of the bin's matches (0 if empty)
+  std::size_t total = 0;                     ///< matches counted
+  /// Brier score: mean of (P(dynamic) − [truth dynamic])², 0 for a perfect forecast, 0.25 for
+  /// always 0.5.
+  double brier = 0.0;
+  /// Expected calibration error: Σ_bins count / total · |mean_p − dynamic / count|.
+  double expected_calibration_error = 0.0;
+};
+
+/// The calibration of the P(dynamic) of `matches` (those with a static or dynamic truth and a
+/// P(dynamic) in [0, 1]).
+ProbabilityCalibration probabilityCalibration(const std::vector<MatchedObject>& matches);
 
 /// Predicted-motion counts of a set of matched objects, indexed by Motion (unknown, static,
 /// dynamic).
@@ -218,6 +243,8 @@ struct EvaluationResult
   std::map<std::string, std::array<std::array<std::size_t, 3>, 3>> motion_confusion_by_class;
   /// Per class, then per truth speed band: the predicted-motion counts of the matches.
   std::map<std::string, std::map<SpeedBand, MotionCounts>> motion_by_class_and_band;
+  /// The calibration of the matches' P(dynamic) (probabilityCalibration(matched_objects)).
+  ProbabilityCalibration p_dynamic_calibration;
   /// evaluateTracking()'s figures when the caller computed them (evaluate() does not).
   std::optional<TrackingMetrics> tracking;
 };
