@@ -39,8 +39,8 @@ public:
 
   /// Checks and fuses a pair: checkProjectedGrid(), checkFusionInputs(), fuse(), the position
   /// (estimateCentres() unless params.fusion.position is kMedian), with tracking the tracker
-  /// (only objects of confirmed tracks stay, with the track's id, motion, position and
-  /// velocity), then objectsToMsg(). Pairs must come in stamp order.
+  /// (every object stays, tentative or confirmed, with its track's id, P(dynamic), motion,
+  /// position and velocity), then objectsToMsg(). Pairs must come in stamp order.
   /// @throws std::invalid_argument naming what is wrong with the pair, e.g. more than
   ///         kMaxFusionDetections detections (the tracker is untouched).
   FusedPair fuse(const Detection2DArray& detections, const ProjectedGrid& grid);
