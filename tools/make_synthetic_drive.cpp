@@ -3,7 +3,6 @@
 //   rosrun grid_vision_fusion make_synthetic_drive --output ~/kitti_synthetic
 //       [--scenario config/synthetic_drive.yaml] [--calibration data/calibration/2011_09_26]
 //       [--drive 9001] [--frames N] [--seed S] [--from-drive RECORDED_DRIVE_DIR]
-#include <ros/package.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -11,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/simulation/synthetic_drive.h"
 
@@ -128,13 +128,10 @@ int main(int argc, char** argv)
     const bool explicit_scenario = !scenario_path.empty();
     if (scenario_path.empty() || options.calibration_dir.empty())
     {
-      const std::string package = ros::package::getPath("grid_vision_fusion");
-      if (package.empty())
-      {
-        return fail(
-            "cannot find the package grid_vision_fusion (source its setup.bash) for the default "
-            "--scenario and --calibration; give both explicitly");
-      }
+      const std::string package =
+          packagePath(scenario_path.empty()
+                          ? (options.calibration_dir.empty() ? "--scenario and --calibration" : "--scenario")
+                          : "--calibration");
       if (scenario_path.empty())
       {
         scenario_path = package + "/config/synthetic_drive.yaml";
