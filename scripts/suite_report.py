@@ -36,7 +36,7 @@ HEADLINE_CLASSES = ("car", "van", "truck", "pedestrian", "cyclist")
 CSV_COLUMNS = ("frame", "label", "truth_motion", "predicted_motion", "truth_band", "truth_speed_mps",
                "longitudinal_m", "position_error_m", "speed_error_mps", "heading_error_rad", "truth_id",
                "track_id")
-OPTIONAL_CSV_COLUMNS = ("p_dynamic",)  # evaluate writes it since issue 26's follow-up; older outputs lack it
+OPTIONAL_CSV_COLUMNS = ("p_dynamic",)  # evaluate writes it; an output of an older evaluate lacks it
 CALIBRATION_BINS = 10
 THRESHOLD_KEYS = {"min_moving_dynamic", "min_moving_dynamic_per_class", "min_static_static",
                   "min_class_matches", "max_dynamic_latency_p90_s"}

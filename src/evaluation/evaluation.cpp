@@ -435,9 +435,10 @@ ProbabilityCalibration probabilityCalibration(const std::vector<MatchedObject>& 
     }
     const auto bin = std::min(static_cast<std::size_t>(m.p_dynamic * ProbabilityCalibration::kBins),
                               ProbabilityCalibration::kBins - 1);
-    const double truth = m.truth_motion == Motion::kDynamic ? 1.0 : 0.0;
+    const bool moving = m.truth_motion == Motion::kDynamic;
+    const double truth = moving ? 1.0 : 0.0;
     ++c.count[bin];
-    c.dynamic[bin] += m.truth_motion == Motion::kDynamic ? 1 : 0;
+    c.dynamic[bin] += moving ? 1 : 0;
     p_sum[bin] += m.p_dynamic;
     squared_error_sum += (m.p_dynamic - truth) * (m.p_dynamic - truth);
     ++c.total;
