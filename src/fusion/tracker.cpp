@@ -49,6 +49,10 @@ void TrackerConfig::validate() const
   }
   requirePositive("track_position_sigma", position_sigma);
   requirePositive("track_max_gap", max_gap);
+  if (!(box_gain > 0.0 && box_gain <= 1.0))
+  {
+    throw std::invalid_argument("track_box_gain must be in (0, 1], got " + std::to_string(box_gain));
+  }
   motion.validate();
 }
 
@@ -96,10 +100,9 @@ double Tracker::positionDistance2(const Track& track, const TrackObservation& ob
   return innovation.dot(s.ldlt().solve(innovation));
 }
 
-std::vector<std::vector<Eigen::Vector2d>> Tracker::expectedCells(
-    double stamp_s, const std::vector<Detection>& detections) const
+std::vector<TrackPrior> Tracker::priors(double stamp_s, const std::vector<Detection>& detections) const
 {
-  std::vector<std::vector<Eigen::Vector2d>> expected(detections.size());
+  std::vector<TrackPrior> priors(detections.size());
   const bool continuing = has_stamp_ && stamp_s >= last_stamp_ && stamp_s - last_stamp_ <= config_.max_gap;
   for (std::size_t d = 0; continuing && d < detections.size(); ++d)
   {
@@ -114,16 +117,62 @@ std::vector<std::vector<Eigen::Vector2d>> Tracker::expectedCells(
         best_iou = iou;
       }
     }
-    if (best != nullptr)
+    if (best == nullptr)
     {
-      const Eigen::Vector2d shift = best->motion.state().tail<2>() * (stamp_s - best->last_seen);
-      for (const Eigen::Vector2d& cell : best->cells)
-      {
-        expected[d].push_back(cell + shift);
-      }
+      continue;
     }
+    TrackPrior& prior = priors[d];
+    const Eigen::Vector2d shift = best->motion.state().tail<2>() * (stamp_s - best->last_seen);
+    for (const Eigen::Vector2d& cell : best->cells)
+    {
+      prior.cells.push_back(cell + shift);
+    }
+    prior.box = filteredBox(*best, detections[d].box, stamp_s).box();
+    prior.has_box = true;
+    prior.label = majorityLabel(*best);
   }
-  return expected;
+  return priors;
+}
+
+BoundingBox Tracker::BoxFilter::box() const
+{
+  return BoundingBox{static_cast<float>(edges(0)), static_cast<float>(edges(1)), static_cast<float>(edges(2)),
+                     static_cast<float>(edges(3))};
+}
+
+Tracker::BoxFilter Tracker::filteredBox(const Track& track, const BoundingBox& box, double stamp_s) const
+{
+  const Eigen::Vector4d measured(box.x_min, box.y_min, box.x_max, box.y_max);
+  const double dt = stamp_s - track.last_seen;
+  BoxFilter filter = track.box_filter;
+  if (!(dt > 0.0))
+  {
+    filter.edges = measured;
+    return filter;
+  }
+  const double alpha = config_.box_gain;
+  const double beta = alpha * alpha / (2.0 - alpha);
+  const Eigen::Vector4d predicted = filter.edges + filter.rates * dt;
+  const Eigen::Vector4d residual = measured - predicted;
+  filter.edges = predicted + alpha * residual;
+  // The first step has no rate yet: it starts from the two boxes' difference.
+  filter.rates = filter.has_rates ? Eigen::Vector4d(filter.rates + beta / dt * residual)
+                                  : Eigen::Vector4d(residual / dt);
+  filter.has_rates = true;
+  // A filter that lost the box's shape (edges crossed) gives way to the detector's box.
+  if (!filter.edges.allFinite() || filter.edges(2) <= filter.edges(0) || filter.edges(3) <= filter.edges(1))
+  {
+    filter = BoxFilter();
+    filter.edges = measured;
+  }
+  return filter;
+}
+
+const std::string& Tracker::majorityLabel(const Track& track)
+{
+  return std::max_element(track.label_votes.begin(), track.label_votes.end(),
+                          [](const auto& a, const auto& b) { return a.second < b.second; })
+      ->first;
 }
 
 const std::string& Tracker::groupOf(const std::string& label) const
@@ -137,9 +186,7 @@ TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
   TrackEstimate e;
   e.confirmed = track.confirmed;
   e.id = track.id;
-  e.label = std::max_element(track.label_votes.begin(), track.label_votes.end(),
-                             [](const auto& a, const auto& b) { return a.second < b.second; })
-                ->first;
+  e.label = majorityLabel(track);
   e.class_id = track.label_classes.at(e.label);
   e.p_dynamic = track.motion.pDynamic();
   e.motion = e.p_dynamic > 0.5 ? Motion::kDynamic : e.p_dynamic < 0.5 ? Motion::kStatic : Motion::kUnknown;
@@ -251,6 +298,7 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
   }
   track.motion.updateGrid(obs.grid);
   track.cells = obs.cells;
+  track.box_filter = filteredBox(track, obs.box, last_stamp_);
   track.last_seen = last_stamp_;
   track.label_votes[obs.label] += obs.score;
   track.label_classes[obs.label] = obs.class_id;
@@ -267,6 +315,7 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   track.group = groupOf(obs.label);
   track.motion = MotionModel(config_.motion);
   track.box = obs.box;
+  track.box_filter.edges = Eigen::Vector4d(obs.box.x_min, obs.box.y_min, obs.box.x_max, obs.box.y_max);
   track.label_votes[obs.label] = obs.score;
   track.label_classes[obs.label] = obs.class_id;
   track.cells = obs.cells;

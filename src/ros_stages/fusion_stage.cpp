@@ -39,12 +39,27 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   }
   const ProjectedPointsView points = viewOf(grid);
   const double stamp = detections.header.stamp.toSec();
-  pair.result = grid_vision_fusion::fuse(pair.detections, points, params_.fusion,
-                                         params_.tracking ? tracker_.expectedCells(stamp, pair.detections)
-                                                          : std::vector<std::vector<Eigen::Vector2d>>{});
+  // A tracked object's band hangs on its filtered box, and its centre takes its track's label's
+  // footprint; the messages keep the detector's boxes and the track's label.
+  std::vector<Detection> fused = pair.detections;
+  std::vector<std::vector<Eigen::Vector2d>> expected;
+  if (params_.tracking)
+  {
+    std::vector<TrackPrior> priors = tracker_.priors(stamp, pair.detections);
+    for (std::size_t d = 0; d < priors.size(); ++d)
+    {
+      if (priors[d].has_box)
+      {
+        fused[d].box = priors[d].box;
+        fused[d].label = priors[d].label;
+      }
+      expected.push_back(std::move(priors[d].cells));
+    }
+  }
+  pair.result = grid_vision_fusion::fuse(fused, points, params_.fusion, expected);
   if (params_.fusion.position == PositionSource::kCentre)
   {
-    estimateCentres(pair.result, pair.detections, points, grid.camera_position.x, grid.camera_position.y,
+    estimateCentres(pair.result, fused, points, grid.camera_position.x, grid.camera_position.y,
                     params_.fusion.centre);
   }
   if (params_.tracking)

@@ -313,9 +313,7 @@ TEST(Tracker, AVanCalledCarNowAndThenStaysAVanOnItsTrack)
   // A detector sees a van as "van" (class 2) at 0.8, and in every third image as "car" (class 0)
   // at 0.6: one track, reported as a van throughout; an object of another group (a pedestrian)
   // at the same place starts its own track.
-  TrackerConfig grouped;
-  grouped.label_groups = {{"car", "vehicle"}, {"van", "vehicle"}, {"truck", "vehicle"}};
-  Tracker tracker(grouped);
+  Tracker tracker;  // the default groups car, van and truck
   for (int k = 0; k < 12; ++k)
   {
     TrackObservation o = observe(k % 3 == 2 ? "car" : "van", 15.0, 2.0, 400.F);
@@ -326,7 +324,9 @@ TEST(Tracker, AVanCalledCarNowAndThenStaysAVanOnItsTrack)
     EXPECT_EQ(e.label, "van") << "image " << k;
     EXPECT_EQ(e.class_id, 2U) << "image " << k;
   }
-  Tracker strict;  // the default: every label a group of its own
+  TrackerConfig ungrouped;
+  ungrouped.label_groups.clear();  // every label a group of its own
+  Tracker strict(ungrouped);
   strict.update(0.0, {observe("van", 15.0, 2.0, 400.F)});
   EXPECT_EQ(strict.update(0.1, {observe("car", 15.0, 2.0, 400.F)})[0].id, 2U);
 }
@@ -350,14 +350,69 @@ TEST(Tracker, ATrackExpectsItsCellsMovedOnByItsVelocity)
   detections[1].box = detections[0].box;
   detections[2].label = "car";
   detections[2].box = BoundingBox{900.F, 100.F, 940.F, 180.F};
-  const auto expected = tracker.expectedCells(1.0, detections);
-  ASSERT_EQ(expected.size(), 3U);
-  ASSERT_EQ(expected[0].size(), 2U);
-  EXPECT_NEAR(expected[0][0].x(), 18.0, 0.1);
-  EXPECT_NEAR(expected[0][1].y(), 0.8, 0.05);
-  EXPECT_TRUE(expected[1].empty());
-  EXPECT_TRUE(expected[2].empty());
-  EXPECT_TRUE(tracker.expectedCells(3.0, detections)[0].empty()) << "a gap over max_gap";
+  const auto priors = tracker.priors(1.0, detections);
+  ASSERT_EQ(priors.size(), 3U);
+  ASSERT_EQ(priors[0].cells.size(), 2U);
+  EXPECT_NEAR(priors[0].cells[0].x(), 18.0, 0.1);
+  EXPECT_NEAR(priors[0].cells[1].y(), 0.8, 0.05);
+  EXPECT_TRUE(priors[0].has_box);
+  EXPECT_EQ(priors[0].label, "car");
+  EXPECT_TRUE(priors[1].cells.empty());
+  EXPECT_FALSE(priors[1].has_box);
+  EXPECT_TRUE(priors[2].cells.empty());
+  EXPECT_FALSE(priors[2].has_box);
+  EXPECT_TRUE(tracker.priors(3.0, detections)[0].cells.empty()) << "a gap over max_gap";
+}
+
+TEST(Tracker, ATrackFiltersTheBoxItsNextDetectionIsFusedWith)
+{
+  // A box sliding right at 100 px/s whose bottom edge jitters by ±6 px from image to image (a
+  // trained detector's): the box a track expects of the next detection follows the slide and
+  // halves the jitter; with box_gain 1 it is the detector's box. The prior also carries the
+  // track's label: a van called "car" in one image keeps the van's footprint.
+  const auto box_at = [](int k)
+  {
+    const float u = 300.F + 10.F * static_cast<float>(k);
+    return BoundingBox{u, 100.F, u + 60.F, 160.F + (k % 2 == 0 ? 6.F : -6.F)};
+  };
+  for (const double gain : {0.5, 1.0})
+  {
+    TrackerConfig config;
+    config.box_gain = gain;
+    Tracker tracker(config);
+    double raw_spread = 0.0;
+    double filtered_spread = 0.0;
+    for (int k = 0; k < 30; ++k)
+    {
+      std::vector<Detection> detections(1);
+      detections[0].label = k == 29 ? "car" : "van";
+      detections[0].box = box_at(k);
+      const auto priors = tracker.priors(k * kFramePeriodS, detections);
+      ASSERT_EQ(priors.size(), 1U);
+      EXPECT_EQ(priors[0].has_box, k > 0) << "image " << k;
+      if (k >= 10)
+      {
+        EXPECT_NEAR(priors[0].box.x_min, detections[0].box.x_min, 0.5)
+            << "no lag on a steady slide, image " << k;
+        EXPECT_NEAR(priors[0].box.x_max, detections[0].box.x_max, 0.5) << "image " << k;
+        raw_spread = std::max(raw_spread, std::abs(detections[0].box.y_max - 160.0));
+        filtered_spread = std::max(filtered_spread, std::abs(priors[0].box.y_max - 160.0));
+        EXPECT_EQ(priors[0].label, "van") << "image " << k;
+      }
+      TrackObservation o = observe(detections[0].label, 15.0, 2.0, 0.F);
+      o.box = detections[0].box;
+      tracker.update(k * kFramePeriodS, {o});
+    }
+    EXPECT_DOUBLE_EQ(raw_spread, 6.0);
+    if (gain < 1.0)
+    {
+      EXPECT_LT(filtered_spread, 3.5) << "the jitter is damped";
+    }
+    else
+    {
+      EXPECT_DOUBLE_EQ(filtered_spread, 6.0) << "gain 1: the detector's box";
+    }
+  }
 }
 
 TEST(Tracker, OverlappingBoxesPassTheGateWhenThePositionJumps)
@@ -404,6 +459,8 @@ TEST(Tracker, ConfigValidation)
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.iou_weight = -1.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.position_sigma = std::nan(""); })),
                std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.box_gain = 0.0; })), std::invalid_argument);
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.box_gain = 1.5; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion.switch_time = 0.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion.grid_error = 0.5; })), std::invalid_argument);
   Tracker tracker;

@@ -186,7 +186,7 @@ Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, c
 /// are 0, 1, 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
 /// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
 /// `expected` (empty, or one list per detection): the cells the detection's track expects
-/// (Tracker::expectedCells()), which objectCluster() prefers.
+/// (Tracker::priors()), which objectCluster() prefers.
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
                   const FusionConfig& config, const std::vector<std::vector<Eigen::Vector2d>>& expected = {});
 

@@ -89,12 +89,12 @@ double fitOrientation(const std::vector<double>& x, const std::vector<double>& y
 /// The cells of `members` (indices into `points`) that belong to the object whose box is `box`:
 /// the members are clustered by single linkage at `cluster_distance`, and the object's cluster is
 /// the one with the most cells near the box's bottom edge in the image, where the object meets
-/// the ground. A cell projected below the bottom edge (v > y_max + 5 % of the box height h) is
-/// nearer than the object's nearest ground point: it belongs to an object in front. A cell
-/// projected higher than y_max − 10 % of h lies behind the object's near face: the walls, parked
-/// cars and kerbs that the band collects around a small object. Such cells count less the
-/// farther out they lie (Gaussian, σ = 5 % of h below, 10 % above). With `expected` (the cells
-/// the object's track had in the last image, moved on by its velocity; empty: none), a cluster's
+/// the ground. A cell projected below the bottom edge (v > y_max + 10 % of the box height h: the
+/// margin of a trained detector's bottom edge) is nearer than the object's nearest ground point:
+/// it belongs to an object in front. A cell projected higher than y_max − 10 % of h lies behind
+/// the object's near face: the walls, parked cars and kerbs that the band collects around a
+/// small object. Such cells count less the farther out they lie (Gaussian, σ = 10 % of h). With `expected`
+/// (the cells the object's track had in the last image, moved on by its velocity; empty: none), a cluster's
 /// score is multiplied by one plus the share of its cells within cluster_distance of an
 /// expected cell: the object's own cells continue from image to image, where a box edge that
 /// moves by a few pixels (a real detector's) tips the bottom-edge score towards what stands

@@ -42,13 +42,16 @@ struct TrackerConfig
   double iou_weight = 1.0;      ///< weight of (1 − IoU) in the association cost, >= 0
   double position_sigma = 0.5;  ///< noise of a position in the association gate [m], > 0
   double max_gap = 1.0;         ///< more time between two images [s], or time going back, resets the tracks
-  /// Labels a detector confuses with each other, label → group name (e.g. car, van, truck →
-  /// vehicle): a track takes objects of every label of its group and reports the label its
-  /// objects had most often (score-weighted). A label not in the map is a group of its own;
-  /// empty (the default): only the same label is associated. With the calibrated YOLOv5s noise
-  /// on the scenario suite, vehicle and person groups cut the id switches by a third but cost
-  /// 0.7 points of moving objects found dynamic (doc/detector_noise.md).
-  std::map<std::string, std::string> label_groups;
+  /// Gain of the track's box filter, (0, 1]: the weight of a new box's edges against their
+  /// prediction (an alpha-beta filter per edge with beta = gain² / (2 − gain)); the fusion band
+  /// and cluster of a tracked object hang on the filtered box (priors()). 1: the detector's box.
+  double box_gain = 0.5;
+  /// Labels a detector confuses with each other, label → group name: a track takes objects of
+  /// every label of its group and reports the label its objects had most often (score-weighted),
+  /// whose footprint its centre takes (priors()). A label not in the map is a group of its own;
+  /// empty: only the same label is associated. The default groups car, van and truck.
+  std::map<std::string, std::string> label_groups{
+      {"car", "vehicle"}, {"van", "vehicle"}, {"truck", "vehicle"}};
   /// The motion model of every track: the whole motion verdict.
   MotionModelConfig motion;
 
@@ -72,9 +75,26 @@ struct TrackObservation
   double length_yaw = 0.0;
   double hidden_length = 0.0;
   /// The cells of the object's cluster [m], fixed frame: what the track expects to continue in
-  /// the next image (expectedCells()).
+  /// the next image (priors()).
   std::vector<Eigen::Vector2d> cells;
   GridMotionEvidence grid;  ///< what the grid says about the object's motion
+};
+
+/// What a detection's track expects of it in an image (Tracker::priors()); all empty for a
+/// detection that no track expects.
+struct TrackPrior
+{
+  /// The cells of the track's cluster in its last image, moved on by its velocity: fuse()
+  /// prefers the cluster that continues them (objectCluster()).
+  std::vector<Eigen::Vector2d> cells;
+  /// The detection's box filtered with the track's boxes: what the fusion band hangs on. A real
+  /// detector's box edges jitter by a few pixels from image to image (doc/detector_noise.md),
+  /// and the band's cells and the cluster's choice with them.
+  bool has_box = false;
+  BoundingBox box;
+  /// The label the track's objects had most often (score-weighted): whose footprint completes
+  /// the centre, where a detector calls the same van "car" in one image and "van" in the next.
+  std::string label;
 };
 
 /// What the tracker says about one observation of the image.
@@ -107,12 +127,13 @@ public:
   /// more than max_gap, first drops every track (ids keep counting up).
   std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations);
 
-  /// For each detection of an image at `stamp_s` [s], the cells its object's track expects: the
-  /// cells of the track (of the detection's label group) whose last box overlaps the detection's
-  /// box most (by min_iou or more), moved on by the track's velocity to `stamp_s`; empty when no
-  /// track qualifies. For fuse() (objectCluster()); the tracks are not changed.
-  std::vector<std::vector<Eigen::Vector2d>> expectedCells(double stamp_s,
-                                                          const std::vector<Detection>& detections) const;
+  /// For each detection of an image at `stamp_s` [s], what the track of its label group whose
+  /// last box overlaps the detection's box most (by min_iou or more) expects of it: its cells
+  /// moved on by the track's velocity to `stamp_s`, the detection's box filtered with the
+  /// track's, the track's label. Empty when no track qualifies. For fuse() and
+  /// estimateCentres(); the tracks are not changed (update() filters the box of the observation
+  /// it associates with a track the same way).
+  std::vector<TrackPrior> priors(double stamp_s, const std::vector<Detection>& detections) const;
 
   /// Replaces the configuration; the tracks are kept. @throws std::invalid_argument as the
   /// constructor, leaving the configuration unchanged.
@@ -125,6 +146,15 @@ public:
   std::size_t size() const { return tracks_.size(); }
 
 private:
+  /// Alpha-beta filter of a box's four edges (x_min, y_min, x_max, y_max) [px, px/s].
+  struct BoxFilter
+  {
+    Eigen::Vector4d edges = Eigen::Vector4d::Zero();
+    Eigen::Vector4d rates = Eigen::Vector4d::Zero();
+    bool has_rates = false;
+    BoundingBox box() const;
+  };
+
   struct Track
   {
     std::uint32_t id = 0;
@@ -132,7 +162,8 @@ private:
     std::map<std::string, double> label_votes;           ///< label → sum of its objects' scores
     std::map<std::string, std::uint32_t> label_classes;  ///< label → detector class index
     MotionModel motion;
-    BoundingBox box;
+    BoundingBox box;                     ///< the detector's box in its last image
+    BoxFilter box_filter;                ///< the filtered box
     std::vector<Eigen::Vector2d> cells;  ///< of its object's cluster in its last image
     double last_seen = 0.0;              ///< stamp of its last image with an object [s]
     int hits = 0;
@@ -149,6 +180,10 @@ private:
   /// A tentative track for an observation left over.
   Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
+  /// The track's box filter after taking `box` at `stamp_s`.
+  BoxFilter filteredBox(const Track& track, const BoundingBox& box, double stamp_s) const;
+  /// The label the track's objects had most often (score-weighted).
+  static const std::string& majorityLabel(const Track& track);
   /// The label group of `label` (label_groups, or the label itself).
   const std::string& groupOf(const std::string& label) const;
   /// Squared Mahalanobis distance of the observation from the track's predicted position, with

@@ -333,6 +333,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("track_iou_weight", t.iou_weight);
   v("track_position_sigma", t.position_sigma);
   v("track_max_gap", t.max_gap);
+  v("track_box_gain", t.box_gain);
   v("track_label_groups", t.label_groups);
   v("track_acceleration_sigma", t.motion.acceleration_sigma);
   v("motion_position_sigma", t.motion.position_sigma);
