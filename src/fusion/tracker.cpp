@@ -243,8 +243,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
     estimates.push_back(estimateOf(tracks_[track_of[o]], stamp_s));
   }
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
-                               [&](const Track& track)
-                               { return track.misses > (track.confirmed ? config_.max_misses : 0); }),
+                               [&](const Track& track) { return track.misses > config_.max_misses; }),
                 tracks_.end());
   return estimates;
 }

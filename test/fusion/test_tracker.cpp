@@ -74,11 +74,23 @@ TEST(Tracker, EveryObjectIsReportedFromItsFirstImageAndConfirmedAfterMinHits)
     EXPECT_EQ(e[0].id, 1U);
     EXPECT_EQ(e[0].motion, Motion::kStatic);
   }
-  // A tentative track missed once is dropped: a single detection never becomes a track.
+  // A tentative track survives max_misses images without an object, as a confirmed one: the car
+  // at 30 m found again after two misses keeps its track (id 2), confirmed by its second hit; a
+  // track missed more often is dropped.
   tracker.update(1.0, {observe("car", 10.0, 0.0, 300.F), observe("car", 30.0, 5.0, 600.F)});
-  const auto later = tracker.update(1.1, {observe("car", 10.0, 0.0, 300.F)});
-  EXPECT_EQ(tracker.size(), 1U);
-  EXPECT_EQ(later[0].id, 1U);
+  tracker.update(1.1, {observe("car", 10.0, 0.0, 300.F)});
+  EXPECT_EQ(tracker.size(), 2U);
+  tracker.update(1.2, {observe("car", 10.0, 0.0, 300.F)});
+  const auto again =
+      tracker.update(1.3, {observe("car", 10.0, 0.0, 300.F), observe("car", 30.0, 5.0, 600.F)});
+  ASSERT_EQ(again.size(), 2U);
+  EXPECT_EQ(again[1].id, 2U);
+  EXPECT_TRUE(again[1].confirmed);
+  for (int k = 4; k <= 4 + TrackerConfig{}.max_misses; ++k)
+  {
+    tracker.update(1.0 + k * kFramePeriodS, {observe("car", 10.0, 0.0, 300.F)});
+  }
+  EXPECT_EQ(tracker.size(), 1U) << "dropped after more than max_misses misses";
 }
 
 TEST(Tracker, ANewMoverIsDynamicFromItsFirstImageWhenTheGridSeesIt)

@@ -12,8 +12,9 @@
 // (MotionModel::restartAt()); a box cut by
 // the image's left or right edge gives no centre (its visible part moves as the object slides
 // out of view, not with the object): the track keeps its prediction. An object left over starts
-// a tentative track, which becomes confirmed after min_hits hits and is dropped at its first
-// miss; a confirmed track is dropped after more than max_misses consecutive misses. Every
+// a tentative track, which becomes confirmed after min_hits hits; a track, tentative or
+// confirmed, is dropped after more than max_misses consecutive misses (a trained detector misses
+// a small object in one image and finds it in the next: its track keeps what it knew). Every
 // matched object is reported, tentative ones too.
 #pragma once
 
@@ -33,7 +34,7 @@ namespace grid_vision_fusion
 struct TrackerConfig
 {
   int min_hits = 2;    ///< hits (images with a matched object) that confirm a track, >= 1
-  int max_misses = 5;  ///< a confirmed track is dropped after more consecutive misses, >= 0
+  int max_misses = 5;  ///< a track is dropped after more consecutive misses, >= 0
   /// Gate on the predicted position: squared Mahalanobis distance <= gate_sigma² [σ], > 0.
   double gate_sigma = 3.0;
   /// Boxes overlapping the track's last box by this IoU or more pass the gate whatever their
