@@ -93,12 +93,13 @@ double fitOrientation(const std::vector<double>& x, const std::vector<double>& y
 /// margin of a trained detector's bottom edge) is nearer than the object's nearest ground point:
 /// it belongs to an object in front. A cell projected higher than y_max − 10 % of h lies behind
 /// the object's near face: the walls, parked cars and kerbs that the band collects around a
-/// small object. Such cells count less the farther out they lie (Gaussian, σ = 10 % of h). With `expected`
-/// (the cells the object's track had in the last image, moved on by its velocity; empty: none), a cluster's
-/// score is multiplied by one plus the share of its cells within cluster_distance of an
-/// expected cell: the object's own cells continue from image to image, where a box edge that
-/// moves by a few pixels (a real detector's) tips the bottom-edge score towards what stands
-/// behind or beside the object. Ties go to the cluster reaching lowest in the image.
+/// small object. Such cells count less the farther out they lie (Gaussian, σ = 10 % of h).
+/// With `expected` (the cells the object's track had in the last image, moved on by its
+/// velocity; empty: none), a cluster's score is multiplied by one plus the share of its cells
+/// within cluster_distance of an expected cell: the object's own cells continue from image to
+/// image, where a box edge that moves by a few pixels (a real detector's) tips the bottom-edge
+/// score towards what stands behind or beside the object. Ties go to the cluster reaching lowest
+/// in the image.
 /// The indices keep the order of `members`; empty when `members` is.
 /// @throws std::invalid_argument when `members` holds an index outside `points`.
 std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
