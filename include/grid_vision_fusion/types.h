@@ -2,6 +2,7 @@
 // projected grid points that the projection produces and the fusion consumes.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -55,6 +56,14 @@ struct BoundingBox
   float y_max = 0.F;
 
   float height() const { return y_max - y_min; }
+  /// The box clipped to a `width` x `height` image [px].
+  BoundingBox clippedTo(std::uint32_t width, std::uint32_t height) const
+  {
+    const float w = static_cast<float>(width);
+    const float h = static_cast<float>(height);
+    return {std::clamp(x_min, 0.F, w), std::clamp(y_min, 0.F, h), std::clamp(x_max, 0.F, w),
+            std::clamp(y_max, 0.F, h)};
+  }
 };
 
 /// One detector output.

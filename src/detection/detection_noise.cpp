@@ -231,10 +231,7 @@ bool clipBox(BoundingBox& box, std::uint32_t width, std::uint32_t height)
 {
   if (width > 0 && height > 0)
   {
-    box.x_min = std::clamp(box.x_min, 0.F, static_cast<float>(width));
-    box.x_max = std::clamp(box.x_max, 0.F, static_cast<float>(width));
-    box.y_min = std::clamp(box.y_min, 0.F, static_cast<float>(height));
-    box.y_max = std::clamp(box.y_max, 0.F, static_cast<float>(height));
+    box = box.clippedTo(width, height);
   }
   return box.x_max - box.x_min >= 1.F && box.y_max - box.y_min >= 1.F;
 }

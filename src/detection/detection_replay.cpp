@@ -203,12 +203,7 @@ std::vector<Detection> DetectionReplay::detectionsOf(std::int64_t frame_index, s
     detection.box = {label.left, label.top, label.right, label.bottom};
     if (image_width > 0 && image_height > 0)
     {
-      const float w = static_cast<float>(image_width);
-      const float h = static_cast<float>(image_height);
-      detection.box.x_min = std::clamp(detection.box.x_min, 0.F, w);
-      detection.box.x_max = std::clamp(detection.box.x_max, 0.F, w);
-      detection.box.y_min = std::clamp(detection.box.y_min, 0.F, h);
-      detection.box.y_max = std::clamp(detection.box.y_max, 0.F, h);
+      detection.box = detection.box.clippedTo(image_width, image_height);
     }
     if (detection.box.x_max > detection.box.x_min && detection.box.y_max > detection.box.y_min)
     {

@@ -1,25 +1,11 @@
 #include "grid_vision_fusion/ros_stages/fusion_stage.h"
 
-#include <algorithm>
 #include <stdexcept>
 
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 
 namespace grid_vision_fusion
 {
-namespace
-{
-/// `box` clipped to a `width` x `height` image (a filtered edge may be extrapolated past it).
-BoundingBox insideImage(BoundingBox box, std::uint32_t width, std::uint32_t height)
-{
-  box.x_min = std::clamp(box.x_min, 0.F, static_cast<float>(width));
-  box.x_max = std::clamp(box.x_max, box.x_min, static_cast<float>(width));
-  box.y_min = std::clamp(box.y_min, 0.F, static_cast<float>(height));
-  box.y_max = std::clamp(box.y_max, box.y_min, static_cast<float>(height));
-  return box;
-}
-}  // namespace
-
 FusionStage::FusionStage(const FusionParams& params) : params_(params), tracker_(params.tracker)
 {
   params_.fusion.validate();
@@ -64,7 +50,8 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     {
       if (priors[d].has_box)
       {
-        fused[d].box = insideImage(priors[d].box, detections.image_width, detections.image_height);
+        // A filtered edge may be extrapolated past the image.
+        fused[d].box = priors[d].box.clippedTo(detections.image_width, detections.image_height);
         fused[d].label = priors[d].label;
       }
       expected.push_back(std::move(priors[d].cells));
