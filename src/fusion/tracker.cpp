@@ -25,6 +25,12 @@ void requirePositive(const char* name, double value)
 
 /// A box edge this close to the image's left or right edge [px] cuts the object.
 constexpr float kTruncationMarginPx = 1.F;
+
+/// The edges (x_min, y_min, x_max, y_max) of `box` [px].
+Eigen::Vector4d edgesOf(const BoundingBox& box)
+{
+  return Eigen::Vector4d(box.x_min, box.y_min, box.x_max, box.y_max);
+}
 }  // namespace
 
 void TrackerConfig::validate() const
@@ -142,7 +148,7 @@ BoundingBox Tracker::BoxFilter::box() const
 
 Tracker::BoxFilter Tracker::filteredBox(const Track& track, const BoundingBox& box, double stamp_s) const
 {
-  const Eigen::Vector4d measured(box.x_min, box.y_min, box.x_max, box.y_max);
+  const Eigen::Vector4d measured = edgesOf(box);
   const double dt = stamp_s - track.last_seen;
   BoxFilter filter = track.box_filter;
   if (!(dt > 0.0))
@@ -314,7 +320,7 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   track.group = groupOf(obs.label);
   track.motion = MotionModel(config_.motion);
   track.box = obs.box;
-  track.box_filter.edges = Eigen::Vector4d(obs.box.x_min, obs.box.y_min, obs.box.x_max, obs.box.y_max);
+  track.box_filter.edges = edgesOf(obs.box);
   track.label_votes[obs.label] = obs.score;
   track.label_classes[obs.label] = obs.class_id;
   track.cells = obs.cells;
