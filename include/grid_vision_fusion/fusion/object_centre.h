@@ -94,6 +94,10 @@ double fitOrientation(const std::vector<double>& x, const std::vector<double>& y
 /// it belongs to an object in front. A cell projected higher than y_max − 10 % of h lies behind
 /// the object's near face: the walls, parked cars and kerbs that the band collects around a
 /// small object. Such cells count less the farther out they lie (Gaussian, σ = 10 % of h).
+/// The bottom edge is where the object's nearest part meets the ground: a cluster's score is
+/// also multiplied by exp(−z²/2), z the distance of its lowest-projected cell above y_max in
+/// units of a trained detector's bottom-edge error (4.7 % of h; below y_max, in units of 10 % of
+/// h beyond the 10 % margin): a wall with more cells than the pedestrian in front of it loses.
 /// With `expected` (the cells the object's track had in the last image, moved on by its
 /// velocity; empty: none), a cluster's score is multiplied by one plus the share of its cells
 /// within cluster_distance of an expected cell: the object's own cells continue from image to
