@@ -87,7 +87,7 @@ void Tracker::setConfig(const TrackerConfig& config)
   config_ = config;
   for (Track& track : tracks_)
   {
-    track.motion.setConfig(config_.motion);
+    track.motion.setConfig(config_.motion.forLabel(majorityLabel(track)));
   }
 }
 
@@ -318,7 +318,7 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   Track track;
   track.id = next_id_++;
   track.group = groupOf(obs.label);
-  track.motion = MotionModel(config_.motion);
+  track.motion = MotionModel(config_.motion.forLabel(obs.label));
   track.box = obs.box;
   track.box_filter.edges = edgesOf(obs.box);
   track.label_votes[obs.label] = obs.score;

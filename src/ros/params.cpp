@@ -440,24 +440,50 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::string& out)
   return true;
 }
 
-bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, std::string>& out)
+namespace
+{
+/// A struct whose every entry converts to T, as a map; false (and `out` untouched) otherwise.
+template <typename T>
+bool paramValueAsMap(const XmlRpc::XmlRpcValue& value, std::map<std::string, T>& out)
 {
   if (value.getType() != XmlRpc::XmlRpcValue::TypeStruct)
   {
     return false;
   }
   auto& v = const_cast<XmlRpc::XmlRpcValue&>(value);
-  std::map<std::string, std::string> read;
+  std::map<std::string, T> read;
   for (auto it = v.begin(); it != v.end(); ++it)
   {
-    if (it->second.getType() != XmlRpc::XmlRpcValue::TypeString)
+    if (!paramValueAs(it->second, read[it->first]))
     {
       return false;
     }
-    read[it->first] = static_cast<std::string>(it->second);
   }
   out = std::move(read);
   return true;
+}
+
+template <typename T>
+XmlRpc::XmlRpcValue toParamValueMap(const std::map<std::string, T>& value)
+{
+  XmlRpc::XmlRpcValue out;
+  out.begin();  // an (empty) struct
+  for (const auto& [key, entry] : value)
+  {
+    out[key] = toParamValue(entry);
+  }
+  return out;
+}
+}  // namespace
+
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, std::string>& out)
+{
+  return paramValueAsMap(value, out);
+}
+
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, double>& out)
+{
+  return paramValueAsMap(value, out);
 }
 
 XmlRpc::XmlRpcValue toParamValue(bool value)
@@ -483,13 +509,12 @@ XmlRpc::XmlRpcValue toParamValue(const std::string& value)
 
 XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, std::string>& value)
 {
-  XmlRpc::XmlRpcValue out;
-  out.begin();  // an (empty) struct
-  for (const auto& [key, entry] : value)
-  {
-    out[key] = entry;
-  }
-  return out;
+  return toParamValueMap(value);
+}
+
+XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, double>& value)
+{
+  return toParamValueMap(value);
 }
 
 // --- unknown parameters ----------------------------------------------------------------------

@@ -229,6 +229,40 @@ TEST(Tracker, ACarThatStartsIsDynamicWithinAFewImages)
   EXPECT_NEAR(e.vx, 3.0, 0.3);
 }
 
+TEST(Tracker, AWalkingPedestrianIsDynamicSoonerUnderAPedestriansPriorSpeed)
+{
+  // A pedestrian walking at 1.4 m/s from its first image (0.14 m per image, less than a grid
+  // cell; its centre ±0.1 m across the walk from image to image), its cells a quarter dynamic
+  // and their velocity unknown (as the grid sees a walking pedestrian: pedestrians_along, shares
+  // 0.17 to 0.33). Under a vehicle's prior speed of 3 m/s per axis the constant-velocity model
+  // pays for the speeds it could have had, and the first steps favour standing; under a
+  // pedestrian's 1.5 m/s it is dynamic sooner.
+  auto first_dynamic = [](const TrackerConfig& config)
+  {
+    Tracker tracker(config);
+    for (int k = 0; k < 30; ++k)
+    {
+      TrackObservation o = observe("pedestrian", 10.0 + 0.14 * k, 2.0 + ((k % 2) ? 0.1 : -0.1), 400.F);
+      o.grid = GridMotionEvidence{};
+      o.grid.dynamic_share = 0.25;
+      if (tracker.update(k * kFramePeriodS, {o})[0].motion == Motion::kDynamic)
+      {
+        return k;
+      }
+    }
+    return -1;
+  };
+  TrackerConfig walking;  // the default: pedestrian 1.5 m/s
+  TrackerConfig vehicle;
+  vehicle.motion.class_speed_sigmas.clear();
+  const int with_prior = first_dynamic(walking);
+  const int without = first_dynamic(vehicle);
+  ASSERT_GE(with_prior, 0);
+  ASSERT_GE(without, 0);
+  EXPECT_LT(with_prior, without);  // 4 images against 5
+  EXPECT_LE(with_prior, 4);
+}
+
 TEST(Tracker, TheFilterFindsTheVelocityFromPositionsAlone)
 {
   // No grid evidence: positions only, a car at (6, −2) m/s. After 3 s the constant-velocity

@@ -114,6 +114,22 @@ TEST(YamlParamSource, NestedKeysAndOverrides)
   EXPECT_EQ(i, 3);
 }
 
+TEST(YamlParamSource, AMapOfNumbers)
+{
+  const YamlParamSource p =
+      YamlParamSource::fromString("speeds: {pedestrian: 1.5, cyclist: 4}\nwords: {car: fast}\n", "m.yaml");
+  std::map<std::string, double> speeds;
+  readParam(p, "speeds", speeds);
+  EXPECT_EQ(speeds,
+            (std::map<std::string, double>{{"cyclist", 4.0}, {"pedestrian", 1.5}}));  // an int is a double
+  EXPECT_EQ(invalidArgument([&] { readParam(p, "words", speeds); }),
+            "parameter m.yaml:words has the wrong type");
+  EXPECT_EQ(speeds.size(), 2U);  // kept when refused
+  std::map<std::string, double> back;
+  ASSERT_TRUE(paramValueAs(toParamValue(speeds), back));
+  EXPECT_EQ(back, speeds);
+}
+
 TEST(YamlParamSource, FileErrorsNameTheFile)
 {
   try

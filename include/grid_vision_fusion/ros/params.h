@@ -70,7 +70,8 @@ private:
 
 /// Conversions of a parameter value, shared by every source: bool from a bool only; int from an
 /// int or an integral double (2.0; 2.5 is refused); uint32 likewise and >= 0; double from a
-/// double or an int; string from a string only; map of strings from a struct of strings. False
+/// double or an int; string from a string only; a map of strings or of doubles from a struct
+/// of them (each entry converting as above). False
 /// when the type does not fit. (Enumerations convert from their names, see node_params.h; such a
 /// conversion throws std::invalid_argument listing the valid names.)
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, bool& out);
@@ -79,6 +80,7 @@ bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::uint32_t& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, double& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::string& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, std::string>& out);
+bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::map<std::string, double>& out);
 
 /// The value of a parameter as the parameter server holds it (the inverse of paramValueAs()).
 XmlRpc::XmlRpcValue toParamValue(bool value);
@@ -87,6 +89,7 @@ XmlRpc::XmlRpcValue toParamValue(std::uint32_t value);
 XmlRpc::XmlRpcValue toParamValue(double value);
 XmlRpc::XmlRpcValue toParamValue(const std::string& value);
 XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, std::string>& value);
+XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, double>& value);
 
 /// Reads parameter `name` of `source` into `value` when it is set; leaves `value` (the default)
 /// untouched when it is not. @throws std::invalid_argument when it is set with a type that
