@@ -9,9 +9,10 @@
 // Mahalanobis distance over gate_sigma² plus iou_weight · (1 − IoU). A matched track's motion
 // model is updated with the object's centre, or, when the object passed the gate by its box
 // alone (a jump of the centre estimate), restarted there keeping its velocity and P(dynamic)
-// (MotionModel::restartAt()); a box cut by
-// the image's left or right edge gives no centre (its visible part moves as the object slides
-// out of view, not with the object): the track keeps its prediction. An object left over starts
+// (MotionModel::restartAt()); the centre of a box cut by the image's left or right edge is
+// measured across the object's length only (its visible part slides along the length as the
+// object leaves or enters the view). A new track's motion model takes its label's prior speed
+// (MotionModelConfig::forLabel()). An object left over starts
 // a tentative track, which becomes confirmed after min_hits hits; a track, tentative or
 // confirmed, is dropped after more than max_misses consecutive misses (a trained detector misses
 // a small object in one image and finds it in the next: its track keeps what it knew). Every
