@@ -71,9 +71,9 @@ private:
 /// Conversions of a parameter value, shared by every source: bool from a bool only; int from an
 /// int or an integral double (2.0; 2.5 is refused); uint32 likewise and >= 0; double from a
 /// double or an int; string from a string only; a map of strings or of doubles from a struct
-/// of them (each entry converting as above). False
-/// when the type does not fit. (Enumerations convert from their names, see node_params.h; such a
-/// conversion throws std::invalid_argument listing the valid names.)
+/// whose every entry converts so. False when the type does not fit. (Enumerations convert from
+/// their names, see node_params.h; such a conversion throws std::invalid_argument listing the
+/// valid names.)
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, bool& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, int& out);
 bool paramValueAs(const XmlRpc::XmlRpcValue& value, std::uint32_t& out);
