@@ -54,25 +54,6 @@ void MotionModelConfig::validate() const
   requireRange("motion_speed_sigma", speed_sigma, 0.0, inf);
   requireRange("motion_switch_time", switch_time, 0.0, inf);
   requireRange("motion_grid_error", grid_error, 0.0, 0.5);
-  for (const auto& [label, sigma] : class_speed_sigmas)
-  {
-    if (label.empty())
-    {
-      throw std::invalid_argument("motion_class_speed_sigmas: a label is empty");
-    }
-    requireRange(("motion_class_speed_sigmas/" + label).c_str(), sigma, 0.0, inf);
-  }
-}
-
-MotionModelConfig MotionModelConfig::forLabel(const std::string& label) const
-{
-  MotionModelConfig config = *this;
-  const auto sigma = class_speed_sigmas.find(label);
-  if (sigma != class_speed_sigmas.end())
-  {
-    config.speed_sigma = sigma->second;
-  }
-  return config;
 }
 
 double logCauchy2(const Eigen::Vector2d& residual, const Eigen::Matrix2d& scale)

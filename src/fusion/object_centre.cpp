@@ -337,10 +337,12 @@ std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
   std::map<std::size_t, std::pair<double, float>> score_of;              // label -> (score, lowest row)
   std::map<std::size_t, std::pair<std::size_t, std::size_t>> continued;  // label -> (cells, expected ones)
   const double near2 = cluster_distance * cluster_distance;
+  // How far a row lies below the bottom edge beyond the margin, in units of the margin.
+  auto beyond_margin_below = [&](double v) { return std::max(v - box.y_max - below_px, 0.0) / below_px; };
   for (std::size_t k = 0; k < n; ++k)
   {
     const float v = points.v[members[k]];
-    const double below = std::max(static_cast<double>(v) - box.y_max - below_px, 0.0) / below_px;
+    const double below = beyond_margin_below(v);
     const double above = std::max(box.y_max - static_cast<double>(v) - above_px, 0.0) / above_px;
     auto& [score, lowest] =
         score_of.try_emplace(label[k], 0.0, -std::numeric_limits<float>::infinity()).first->second;
@@ -363,7 +365,7 @@ std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
     // nearest cell lies well below it stands in front.
     const double behind =
         std::max(box.y_max - static_cast<double>(lowest), 0.0) / (kBottomEdgeErrorFraction * box_height);
-    const double in_front = std::max(static_cast<double>(lowest) - box.y_max - below_px, 0.0) / below_px;
+    const double in_front = beyond_margin_below(lowest);
     score *= std::exp(-0.5 * behind * behind - in_front * in_front);
   }
   std::size_t chosen = score_of.begin()->first;

@@ -29,9 +29,6 @@
 
 #include <Eigen/Core>
 
-#include <map>
-#include <string>
-
 namespace grid_vision_fusion
 {
 /// Parameters of the motion model. Each has a physical meaning; together they are the whole
@@ -45,11 +42,6 @@ struct MotionModelConfig
   double acceleration_sigma = 2.0;
   /// Prior velocity of an object that starts to move or is first seen, per axis [m/s], > 0.
   double speed_sigma = 3.0;
-  /// The same for the labels whose objects move at other speeds, label → σ [m/s], each > 0:
-  /// a pedestrian walks at about 1.4 m/s, where a vehicle drives at anything up to 15 m/s. Under
-  /// a prior as wide as a vehicle's, a walking pedestrian's first steps are explained as well by
-  /// standing as by moving (doc/nodelets/fusion.md, "Motion model").
-  std::map<std::string, double> class_speed_sigmas{{"pedestrian", 1.5}};
   /// Mean time between two changes of the motion mode [s], > 0: the inertia of the verdict.
   double switch_time = 2.0;
   /// Probability that the grid's dynamic share of an object points the wrong way, (0, 0.5).
@@ -57,8 +49,6 @@ struct MotionModelConfig
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
   void validate() const;
-  /// This configuration with speed_sigma taken from class_speed_sigmas for `label` (when listed).
-  MotionModelConfig forLabel(const std::string& label) const;
 };
 
 /// What the dynamic grid says about one object's motion, from its cells.
