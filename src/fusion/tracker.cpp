@@ -60,6 +60,25 @@ void TrackerConfig::validate() const
     throw std::invalid_argument("track_box_gain must be in (0, 1], got " + std::to_string(box_gain));
   }
   motion.validate();
+  for (const auto& [label, sigma] : class_speed_sigmas)
+  {
+    if (label.empty())
+    {
+      throw std::invalid_argument("motion_class_speed_sigmas: a label is empty");
+    }
+    requirePositive(("motion_class_speed_sigmas/" + label).c_str(), sigma);
+  }
+}
+
+MotionModelConfig TrackerConfig::motionFor(const std::string& label) const
+{
+  MotionModelConfig config = motion;
+  const auto sigma = class_speed_sigmas.find(label);
+  if (sigma != class_speed_sigmas.end())
+  {
+    config.speed_sigma = sigma->second;
+  }
+  return config;
 }
 
 double boxOverlap(const BoundingBox& a, const BoundingBox& b)
@@ -87,7 +106,7 @@ void Tracker::setConfig(const TrackerConfig& config)
   config_ = config;
   for (Track& track : tracks_)
   {
-    track.motion.setConfig(config_.motion.forLabel(majorityLabel(track)));
+    track.motion.setConfig(config_.motionFor(majorityLabel(track)));
   }
 }
 
@@ -318,7 +337,7 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   Track track;
   track.id = next_id_++;
   track.group = groupOf(obs.label);
-  track.motion = MotionModel(config_.motion.forLabel(obs.label));
+  track.motion = MotionModel(config_.motionFor(obs.label));
   track.box = obs.box;
   track.box_filter.edges = edgesOf(obs.box);
   track.label_votes[obs.label] = obs.score;

@@ -271,17 +271,6 @@ TEST(MotionModel, LogCauchyIsTheBivariateStudentTWithOneDegreeOfFreedom)
               logCauchy2(Eigen::Vector2d(1.0, 0.0), unit) - std::log(4.0), 1e-12);
 }
 
-TEST(MotionModel, ALabelTakesItsOwnPriorSpeed)
-{
-  MotionModelConfig config;
-  config.speed_sigma = 3.0;
-  config.class_speed_sigmas = {{"pedestrian", 1.5}};
-  EXPECT_DOUBLE_EQ(config.forLabel("pedestrian").speed_sigma, 1.5);
-  EXPECT_DOUBLE_EQ(config.forLabel("car").speed_sigma, 3.0);
-  EXPECT_DOUBLE_EQ(config.forLabel("").speed_sigma, 3.0);
-  EXPECT_EQ(config.forLabel("pedestrian").class_speed_sigmas, config.class_speed_sigmas);
-}
-
 TEST(MotionModel, ConfigValidation)
 {
   EXPECT_NO_THROW(MotionModelConfig{}.validate());
@@ -309,17 +298,6 @@ TEST(MotionModel, ConfigValidation)
   {
     EXPECT_NE(std::string(e.what()).find("motion_grid_error"), std::string::npos) << e.what();
   }
-  try
-  {
-    MotionModel(bad([](MotionModelConfig& c) { c.class_speed_sigmas["cyclist"] = 0.0; }));
-    FAIL() << "no exception";
-  }
-  catch (const std::invalid_argument& e)
-  {
-    EXPECT_NE(std::string(e.what()).find("motion_class_speed_sigmas/cyclist"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(MotionModel(bad([](MotionModelConfig& c) { c.class_speed_sigmas[""] = 1.0; })),
-               std::invalid_argument);
   MotionModel model;
   EXPECT_THROW(model.setConfig(bad([](MotionModelConfig& c) { c.switch_time = -1.0; })),
                std::invalid_argument);

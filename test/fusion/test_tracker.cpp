@@ -254,7 +254,7 @@ TEST(Tracker, AWalkingPedestrianIsDynamicSoonerUnderAPedestriansPriorSpeed)
   };
   TrackerConfig walking;  // the default: pedestrian 1.5 m/s
   TrackerConfig vehicle;
-  vehicle.motion.class_speed_sigmas.clear();
+  vehicle.class_speed_sigmas.clear();
   const int with_prior = first_dynamic(walking);
   const int without = first_dynamic(vehicle);
   ASSERT_GE(with_prior, 0);
@@ -489,6 +489,17 @@ TEST(Tracker, TimeGoingBackOrAGapResetsTheTracks)
   EXPECT_EQ(tracker.size(), 1U);
 }
 
+TEST(Tracker, ALabelTakesItsOwnPriorSpeed)
+{
+  TrackerConfig config;
+  config.motion.speed_sigma = 3.0;
+  config.class_speed_sigmas = {{"pedestrian", 1.5}};
+  EXPECT_DOUBLE_EQ(config.motionFor("pedestrian").speed_sigma, 1.5);
+  EXPECT_DOUBLE_EQ(config.motionFor("car").speed_sigma, 3.0);
+  EXPECT_DOUBLE_EQ(config.motionFor("").speed_sigma, 3.0);
+  EXPECT_DOUBLE_EQ(config.motionFor("pedestrian").switch_time, config.motion.switch_time);
+}
+
 TEST(Tracker, ConfigValidation)
 {
   EXPECT_NO_THROW(TrackerConfig{}.validate());
@@ -509,6 +520,16 @@ TEST(Tracker, ConfigValidation)
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.box_gain = 1.5; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion.switch_time = 0.0; })), std::invalid_argument);
   EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.motion.grid_error = 0.5; })), std::invalid_argument);
+  try
+  {
+    Tracker(bad([](TrackerConfig& c) { c.class_speed_sigmas["cyclist"] = 0.0; }));
+    FAIL() << "no exception";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("motion_class_speed_sigmas/cyclist"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(Tracker(bad([](TrackerConfig& c) { c.class_speed_sigmas[""] = 1.0; })), std::invalid_argument);
   Tracker tracker;
   EXPECT_THROW(tracker.setConfig(bad([](TrackerConfig& c) { c.max_gap = 0.0; })), std::invalid_argument);
   EXPECT_DOUBLE_EQ(tracker.config().max_gap, TrackerConfig{}.max_gap);

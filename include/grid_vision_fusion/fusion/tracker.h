@@ -12,7 +12,7 @@
 // (MotionModel::restartAt()); the centre of a box cut by the image's left or right edge is
 // measured across the object's length only (its visible part slides along the length as the
 // object leaves or enters the view). A new track's motion model takes its label's prior speed
-// (MotionModelConfig::forLabel()). An object left over starts
+// (TrackerConfig::motionFor()). An object left over starts
 // a tentative track, which becomes confirmed after min_hits hits; a track, tentative or
 // confirmed, is dropped after more than max_misses consecutive misses (a trained detector misses
 // a small object in one image and finds it in the next: its track keeps what it knew). Every
@@ -56,9 +56,18 @@ struct TrackerConfig
       {"car", "vehicle"}, {"van", "vehicle"}, {"truck", "vehicle"}};
   /// The motion model of every track: the whole motion verdict.
   MotionModelConfig motion;
+  /// The motion model's prior speed (MotionModelConfig::speed_sigma) for the labels whose
+  /// objects move at other speeds, label → σ [m/s], each > 0: a pedestrian walks at about
+  /// 1.4 m/s, where a vehicle drives at anything up to 15 m/s. Under a prior as wide as a
+  /// vehicle's, a walking pedestrian's first steps are explained as well by standing as by
+  /// moving (doc/nodelets/fusion.md, "Motion model").
+  std::map<std::string, double> class_speed_sigmas{{"pedestrian", 1.5}};
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
   void validate() const;
+  /// `motion` with speed_sigma taken from class_speed_sigmas for `label` (when listed): the
+  /// motion model of a track of that label.
+  MotionModelConfig motionFor(const std::string& label) const;
 };
 
 /// One fused object of an image, as the tracker sees it.

@@ -338,7 +338,7 @@ void visitParams(FusionParams& p, Visitor& v)
   v("track_acceleration_sigma", t.motion.acceleration_sigma);
   v("motion_position_sigma", t.motion.position_sigma);
   v("motion_speed_sigma", t.motion.speed_sigma);
-  v("motion_class_speed_sigmas", t.motion.class_speed_sigmas);
+  v("motion_class_speed_sigmas", t.class_speed_sigmas);
   v("motion_switch_time", t.motion.switch_time);
   v("motion_grid_error", t.motion.grid_error);
 }
