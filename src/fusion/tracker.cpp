@@ -26,6 +26,12 @@ void requirePositive(const char* name, double value)
 /// A box edge this close to the image's left or right edge [px] cuts the object.
 constexpr float kTruncationMarginPx = 1.F;
 
+/// The unit vector along the observed object's length (fixed frame).
+Eigen::Vector2d lengthAxis(const TrackObservation& observation)
+{
+  return Eigen::Vector2d(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
+}
+
 /// The edges (x_min, y_min, x_max, y_max) of `box` [px].
 Eigen::Vector4d edgesOf(const BoundingBox& box)
 {
@@ -119,8 +125,16 @@ void Tracker::reset()
 double Tracker::positionDistance2(const Track& track, const TrackObservation& observation) const
 {
   const Eigen::Vector4d state = track.motion.state();
-  const Eigen::Matrix2d s = track.motion.covariance().topLeftCorner<2, 2>() +
-                            config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d s = track.motion.covariance().topLeftCorner<2, 2>() +
+                      config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  if (observation.truncated)
+  {
+    // The centre of a cut box is off by up to half the hidden length along the object's length,
+    // as in its update.
+    const Eigen::Vector2d length = lengthAxis(observation);
+    const double offset = 0.5 * observation.hidden_length;
+    s += offset * offset * length * length.transpose();
+  }
   const Eigen::Vector2d innovation(observation.x - state(0), observation.y - state(1));
   return innovation.dot(s.ldlt().solve(innovation));
 }
@@ -303,22 +317,22 @@ std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>&
 void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 {
   const Eigen::Vector2d centre(obs.x, obs.y);
-  if (obs.truncated)
+  if (!(positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma))
+  {
+    // Admitted by its box alone: the centre estimate jumped (a partly hidden object, another
+    // object's cells, a cut box whose outline turned). Restart the filters there, keeping what
+    // they knew of the motion.
+    track.motion.restartAt(centre);
+  }
+  else if (obs.truncated)
   {
     // The box is cut by the image edge: along the object's length its centre follows the
     // visible part, off by up to half the length the cells miss.
-    const Eigen::Vector2d length(std::cos(obs.length_yaw), std::sin(obs.length_yaw));
-    track.motion.update(centre, length, 0.5 * obs.hidden_length);
-  }
-  else if (positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma)
-  {
-    track.motion.update(centre);
+    track.motion.update(centre, lengthAxis(obs), 0.5 * obs.hidden_length);
   }
   else
   {
-    // Admitted by its box alone: the centre estimate jumped (a partly hidden object, or another
-    // object's cells). Restart the filters there, keeping what they knew of the motion.
-    track.motion.restartAt(centre);
+    track.motion.update(centre);
   }
   track.motion.updateGrid(obs.grid);
   track.cells = obs.cells;

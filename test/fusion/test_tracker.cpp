@@ -311,6 +311,35 @@ TEST(Tracker, AParkedCarLeavingTheImageIsNotTakenForAMover)
   }
 }
 
+TEST(Tracker, ACutBoxWhoseCentreJumpsRestartsTheFiltersInsteadOfMovingThem)
+{
+  // A truck crosses at 8 m/s (along -y) with its box cut by the image edge. At image 10 its
+  // outline turns: the cut box's centre jumps 3.75 m across its length. Taken as a measurement,
+  // that jump would give the truck a sideways velocity of about 5 m/s, which the next centres
+  // contradict (they then fit standing better); beyond the gate it restarts the filters there,
+  // as for a box that is not cut.
+  Tracker tracker;
+  const double kPi = std::acos(-1.0);
+  for (int k = 0; k < 20; ++k)
+  {
+    const bool turned = k >= 10;
+    TrackObservation o =
+        moving("truck", turned ? 16.25 : 20.0, 15.0 - 0.8 * k + (turned ? 2.65 : 0.0), 1230.F, 0.0, -8.0);
+    o.box.x_max = 1242.F;
+    o.truncated = true;
+    o.length_yaw = -0.5 * kPi;
+    o.hidden_length = 4.0;
+    const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];
+    EXPECT_EQ(e.id, 1U);
+    if (k >= 3)
+    {
+      EXPECT_EQ(e.motion, Motion::kDynamic) << "image " << k;
+      EXPECT_LT(std::abs(e.vx), 1.0) << "image " << k << ": the jump is not a sideways velocity";
+      EXPECT_NEAR(e.vy, -8.0, 1.5) << "image " << k;
+    }
+  }
+}
+
 TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
 {
   // trackObjects() tells the tracker which boxes touch the left or right image edge: the cut one

@@ -198,7 +198,8 @@ private:
   /// The label group of `label` (label_groups, or the label itself).
   const std::string& groupOf(const std::string& label) const;
   /// Squared Mahalanobis distance of the observation from the track's predicted position, with
-  /// the association noise position_sigma.
+  /// the association noise position_sigma and, for a box cut by the image edge, its centre's
+  /// offset along the object's length: the association gate and the update's gate.
   double positionDistance2(const Track& track, const TrackObservation& observation) const;
 
   TrackerConfig config_;
