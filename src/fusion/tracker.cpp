@@ -317,7 +317,11 @@ std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>&
 void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 {
   const Eigen::Vector2d centre(obs.x, obs.y);
-  if (!(positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma))
+  // A track seen once has no estimate for its centre to jump from, only one centre and no
+  // velocity: its second centre, wherever it lies, is its first step (a car at 20 m/s moves 2 m
+  // between two images, beyond the gate of the prior speed).
+  const bool first_step = track.hits == 1;
+  if (!first_step && !(positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma))
   {
     // Admitted by its box alone: the centre estimate jumped (a partly hidden object, another
     // object's cells, a cut box whose outline turned). Restart the filters there, keeping what

@@ -311,6 +311,31 @@ TEST(Tracker, AParkedCarLeavingTheImageIsNotTakenForAMover)
   }
 }
 
+TEST(Tracker, AFastCarIsMeasuredFromItsSecondImage)
+{
+  // A car first seen at 20 m/s moves 2 m between two images: beyond the gate of a track that
+  // knows only its prior speed, so its second object is admitted by its box. That step is the
+  // car's first, not a jump of an estimate: the filters take it, and the centres alone (the grid
+  // saying nothing) make it dynamic from its third image. Restarted at each step instead, the
+  // track would never learn its velocity.
+  Tracker tracker;
+  for (int k = 0; k < 8; ++k)
+  {
+    TrackObservation o = observe("car", 10.0 + 2.0 * k, 3.0, 300.F + 4.F * static_cast<float>(k));
+    o.grid = GridMotionEvidence();
+    const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];
+    EXPECT_EQ(e.id, 1U);
+    if (k >= 2)
+    {
+      EXPECT_EQ(e.motion, Motion::kDynamic) << "image " << k;
+    }
+    if (k >= 4)
+    {
+      EXPECT_NEAR(e.vx, 20.0, 2.0) << "image " << k;
+    }
+  }
+}
+
 TEST(Tracker, ACutBoxWhoseCentreJumpsRestartsTheFiltersInsteadOfMovingThem)
 {
   // A truck crosses at 8 m/s (along -y) with its box cut by the image edge. At image 10 its
