@@ -32,6 +32,13 @@ Eigen::Vector2d lengthAxis(const TrackObservation& observation)
   return Eigen::Vector2d(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
 }
 
+/// How far the centre of a box cut by the image edge may lie from the object's along its length
+/// [m]: the visible part's centre, off by up to half the length its cells miss.
+double cutOffset(const TrackObservation& observation)
+{
+  return 0.5 * observation.hidden_length;
+}
+
 /// The edges (x_min, y_min, x_max, y_max) of `box` [px].
 Eigen::Vector4d edgesOf(const BoundingBox& box)
 {
@@ -129,10 +136,8 @@ double Tracker::positionDistance2(const Track& track, const TrackObservation& ob
                       config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
   if (observation.truncated)
   {
-    // The centre of a cut box is off by up to half the hidden length along the object's length,
-    // as in its update.
     const Eigen::Vector2d length = lengthAxis(observation);
-    const double offset = 0.5 * observation.hidden_length;
+    const double offset = cutOffset(observation);
     s += offset * offset * length * length.transpose();
   }
   const Eigen::Vector2d innovation(observation.x - state(0), observation.y - state(1));
@@ -331,8 +336,8 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
   else if (obs.truncated)
   {
     // The box is cut by the image edge: along the object's length its centre follows the
-    // visible part, off by up to half the length the cells miss.
-    track.motion.update(centre, lengthAxis(obs), 0.5 * obs.hidden_length);
+    // visible part.
+    track.motion.update(centre, lengthAxis(obs), cutOffset(obs));
   }
   else
   {
