@@ -241,10 +241,9 @@ Eigen::Matrix4d MotionModel::covariance() const
          mu_dynamic_ * (moving_cov_ + e_d * e_d.transpose());
 }
 
-double MotionModel::distance2(const Eigen::Vector2d& position) const
+double MotionModel::distance2(const Eigen::Vector2d& position, const Eigen::Matrix2d& noise) const
 {
-  const Eigen::Matrix2d s = covariance().topLeftCorner<2, 2>() +
-                            config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d s = covariance().topLeftCorner<2, 2>() + noise;
   const Eigen::Vector2d innovation = position - state().head<2>();
   return innovation.dot(s.ldlt().solve(innovation));
 }

@@ -131,17 +131,14 @@ void Tracker::reset()
 
 double Tracker::positionDistance2(const Track& track, const TrackObservation& observation) const
 {
-  const Eigen::Vector4d state = track.motion.state();
-  Eigen::Matrix2d s = track.motion.covariance().topLeftCorner<2, 2>() +
-                      config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d noise = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
   if (observation.truncated)
   {
     const Eigen::Vector2d length = lengthAxis(observation);
     const double offset = cutOffset(observation);
-    s += offset * offset * length * length.transpose();
+    noise += offset * offset * length * length.transpose();
   }
-  const Eigen::Vector2d innovation(observation.x - state(0), observation.y - state(1));
-  return innovation.dot(s.ldlt().solve(innovation));
+  return track.motion.distance2(Eigen::Vector2d(observation.x, observation.y), noise);
 }
 
 std::vector<TrackPrior> Tracker::priors(double stamp_s, const std::vector<Detection>& detections) const

@@ -253,8 +253,9 @@ TEST(MotionModel, TheCombinedStateWeighsTheModels)
   const Eigen::Matrix4d p = model.covariance();
   EXPECT_TRUE(p.isApprox(p.transpose()));
   EXPECT_GT(p(2, 2), 0.0);
-  EXPECT_DOUBLE_EQ(model.distance2(Eigen::Vector2d(3.0, -2.0)), 0.0);
-  EXPECT_GT(model.distance2(Eigen::Vector2d(4.0, -2.0)), 0.0);
+  const Eigen::Matrix2d noise = 0.15 * 0.15 * Eigen::Matrix2d::Identity();
+  EXPECT_DOUBLE_EQ(model.distance2(Eigen::Vector2d(3.0, -2.0), noise), 0.0);
+  EXPECT_GT(model.distance2(Eigen::Vector2d(4.0, -2.0), noise), 0.0);
   model.predict(0.0);  // no time: nothing changes
   EXPECT_DOUBLE_EQ(model.modeProbability(), 0.25);
   EXPECT_NEAR(model.speedSigma(), MotionModelConfig{}.speed_sigma, 1e-9);

@@ -108,8 +108,8 @@ public:
   /// The constant-velocity model's velocity [m/s]: the object's velocity should it move.
   Eigen::Vector2d movingVelocity() const { return moving_.tail<2>(); }
   /// Squared Mahalanobis distance of `position` from the combined predicted centre, with the
-  /// measurement noise position_sigma (association gate).
-  double distance2(const Eigen::Vector2d& position) const;
+  /// measurement noise covariance `noise` [m²] (the tracker's association gate).
+  double distance2(const Eigen::Vector2d& position, const Eigen::Matrix2d& noise) const;
 
   /// Standard deviation of the constant-velocity model's speed [m/s] (along its velocity).
   double speedSigma() const;
