@@ -89,12 +89,8 @@ double MotionModel::speedSigma() const
 
 void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
 {
-  const double r = config_.position_sigma * config_.position_sigma;
-  const double v = config_.speed_sigma * config_.speed_sigma;
-  standing_ = position;
-  standing_cov_ = r * Eigen::Matrix2d::Identity();
-  moving_ << position, 0.0, 0.0;
-  moving_cov_ = Eigen::Vector4d(r, r, v, v).asDiagonal();
+  moving_.tail<2>().setZero();
+  restartAt(position);
   mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
   grid_log_ratio_ = 0.0;
 }
@@ -102,12 +98,14 @@ void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
 void MotionModel::restartAt(const Eigen::Vector2d& position)
 {
   const double r = config_.position_sigma * config_.position_sigma;
+  const double v = config_.speed_sigma * config_.speed_sigma;
   standing_ = position;
   standing_cov_ = r * Eigen::Matrix2d::Identity();
+  // On a restart the velocity was measured on the centres before the jump, which followed
+  // another part of the object or another object's cells: its value stays the best guess, its
+  // certainty goes back to the prior's.
   moving_.head<2>() = position;
-  moving_cov_.topLeftCorner<2, 2>() = r * Eigen::Matrix2d::Identity();
-  moving_cov_.topRightCorner<2, 2>().setZero();
-  moving_cov_.bottomLeftCorner<2, 2>().setZero();
+  moving_cov_ = Eigen::Vector4d(r, r, v, v).asDiagonal();
 }
 
 void MotionModel::predict(double dt)

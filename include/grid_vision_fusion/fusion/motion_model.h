@@ -76,7 +76,9 @@ public:
   void start(const Eigen::Vector2d& position, double p_dynamic);
   /// Moves both filters to `position` [m] with the measurement's uncertainty, keeping the
   /// velocity of the constant-velocity model and the mode probability: a jump of the centre
-  /// estimate (the visible part of the object changed) says nothing about the motion.
+  /// estimate (the visible part of the object changed) says nothing about the motion. The
+  /// velocity's uncertainty goes back to the prior's: it was measured on the centres before the
+  /// jump, which may have followed another part of the object or another object's cells.
   void restartAt(const Eigen::Vector2d& position);
   /// Mixes the two models for a step of `dt` [s] (the mode may switch) and predicts both; dt <= 0
   /// leaves the filter unchanged.
