@@ -8,15 +8,16 @@
 // box overlapping the track's last box by min_iou or more); the cost of a pair is its squared
 // Mahalanobis distance over gate_sigma² plus iou_weight · (1 − IoU). A matched track's motion model
 // is updated with the object's centre, or, when the object passed the gate by its box alone (a jump
-// of the centre estimate), restarted there keeping its velocity and P(dynamic)
-// (MotionModel::restartAt()), except at the track's second object (its first step: a track seen
-// once has no estimate to jump from); the centre of a box cut by the image's left or right edge is
-// measured across the object's length only (its visible part slides along the length as the object
-// leaves or enters the view), in the gate too. A new track's motion model takes its label's prior
-// speed (TrackerConfig::motionFor()). An object left over starts a tentative track, which becomes
-// confirmed after min_hits hits; a track, tentative or confirmed, is dropped after more than
-// max_misses consecutive misses (a trained detector misses a small object in one image and finds it
-// in the next: its track keeps what it knew). Every matched object is reported, tentative ones too.
+// of the centre estimate), restarted there keeping its velocity (at the prior's uncertainty) and
+// P(dynamic) (MotionModel::restartAt()), except at the track's second object (its first step: a
+// track seen once has no estimate to jump from); the centre of a box cut by the image's left or
+// right edge is measured across the object's length only (its visible part slides along the length
+// as the object leaves or enters the view), in the gate too. A new track's motion model takes its
+// label's prior speed (TrackerConfig::motionFor()). An object left over starts a tentative track,
+// which becomes confirmed after min_hits hits; a track, tentative or confirmed, is dropped after
+// more than max_misses consecutive misses (a trained detector misses a small object in one image
+// and finds it in the next: its track keeps what it knew). Every matched object is reported,
+// tentative ones too.
 #pragma once
 
 #include <cstddef>
