@@ -31,6 +31,14 @@ source "$workspace/devel/setup.bash"
 
 rm -rf "$out"
 mkdir -p "$out"
+# rosbag record stops (and the chain's objects are lost) when less than 1 GiB is free; the drive,
+# its bag and the recording take about 0.5 GiB more.
+free_mib=$(df --output=avail -BM "$out" | tail -1 | tr -dc '0-9')
+if (( free_mib < 1536 )); then
+  echo "demo: only $free_mib MiB free under $out; the demo needs 1536 MiB (rosbag record stops" \
+    "below 1 GiB). Free some space or set GVF_DEMO_OUTPUT to a folder on another disk." >&2
+  exit 1
+fi
 drive=$out/kitti/2011_09_26/2011_09_26_drive_9001_sync
 
 step "2/6 synthetic drive (config/synthetic_drive.yaml) in the KITTI raw layout"
