@@ -166,13 +166,13 @@ void MotionModel::predict(double dt)
 
 void MotionModel::update(const Eigen::Vector2d& position)
 {
-  update(position, Eigen::Vector2d::UnitX(), 0.0);
+  update(position, Eigen::Matrix2d::Zero());
 }
 
-void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Vector2d& axis, double offset)
+void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Matrix2d& extra_noise)
 {
-  const Eigen::Matrix2d r = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity() +
-                            offset * offset * axis * axis.transpose();
+  const Eigen::Matrix2d r =
+      config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity() + extra_noise;
   // Likelihoods (IMM step 3), then each model's Kalman update.
   const Eigen::Vector2d nu_s = position - standing_;
   const Eigen::Matrix2d s_s = standing_cov_ + r;

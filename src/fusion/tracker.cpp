@@ -26,17 +26,18 @@ void requirePositive(const char* name, double value)
 /// A box edge this close to the image's left or right edge [px] cuts the object.
 constexpr float kTruncationMarginPx = 1.F;
 
-/// The unit vector along the observed object's length (fixed frame).
-Eigen::Vector2d lengthAxis(const TrackObservation& observation)
+/// What a box cut by the image edge adds to its centre's noise [m²]: along the object's length
+/// the centre is the visible part's, off by up to half the length its cells miss. Zero for a box
+/// that is not cut.
+Eigen::Matrix2d cutNoise(const TrackObservation& observation)
 {
-  return Eigen::Vector2d(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
-}
-
-/// How far the centre of a box cut by the image edge may lie from the object's along its length
-/// [m]: the visible part's centre, off by up to half the length its cells miss.
-double cutOffset(const TrackObservation& observation)
-{
-  return 0.5 * observation.hidden_length;
+  if (!observation.truncated)
+  {
+    return Eigen::Matrix2d::Zero();
+  }
+  const Eigen::Vector2d length(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
+  const double offset = 0.5 * observation.hidden_length;
+  return offset * offset * length * length.transpose();
 }
 
 /// The edges (x_min, y_min, x_max, y_max) of `box` [px].
@@ -131,13 +132,8 @@ void Tracker::reset()
 
 double Tracker::positionDistance2(const Track& track, const TrackObservation& observation) const
 {
-  Eigen::Matrix2d noise = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
-  if (observation.truncated)
-  {
-    const Eigen::Vector2d length = lengthAxis(observation);
-    const double offset = cutOffset(observation);
-    noise += offset * offset * length * length.transpose();
-  }
+  const Eigen::Matrix2d noise =
+      config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity() + cutNoise(observation);
   return track.motion.distance2(Eigen::Vector2d(observation.x, observation.y), noise);
 }
 
@@ -330,15 +326,10 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
     // they knew of the motion.
     track.motion.restartAt(centre);
   }
-  else if (obs.truncated)
-  {
-    // The box is cut by the image edge: along the object's length its centre follows the
-    // visible part.
-    track.motion.update(centre, lengthAxis(obs), cutOffset(obs));
-  }
   else
   {
-    track.motion.update(centre);
+    // A box cut by the image edge: along the object's length its centre follows the visible part.
+    track.motion.update(centre, cutNoise(obs));
   }
   track.motion.updateGrid(obs.grid);
   track.cells = obs.cells;

@@ -208,7 +208,8 @@ TEST(MotionModel, ACentreCutAlongTheLengthSaysNothingAlongIt)
       model.predict(kDt);
       const Eigen::Vector2d centre =
           along ? Eigen::Vector2d(10.0 + 0.2 * k, 0.0) : Eigen::Vector2d(10.0, 0.2 * k);
-      model.update(centre, Eigen::Vector2d::UnitX(), 0.4 * k);
+      const double offset = 0.4 * k;
+      model.update(centre, offset * offset * Eigen::Vector2d::UnitX() * Eigen::Vector2d::UnitX().transpose());
     }
     if (along)
     {

@@ -86,10 +86,9 @@ public:
   /// Updates both models with the observed centre `position` [m] and the mode probability with
   /// their likelihoods.
   void update(const Eigen::Vector2d& position);
-  /// The same with a centre that is off by up to `offset` [m] along the unit vector `axis` (a box
-  /// cut by the image edge: the visible part of the object's length): its noise grows by offset²
-  /// along that axis.
-  void update(const Eigen::Vector2d& position, const Eigen::Vector2d& axis, double offset);
+  /// The same with a centre whose noise covariance grows by `extra_noise` [m²] (a box cut by the
+  /// image edge: its centre is off along the object's length by up to the length it hides).
+  void update(const Eigen::Vector2d& position, const Eigen::Matrix2d& extra_noise);
 
   /// Takes in what the grid says about the object at this image: its likelihood ratio of D
   /// against S (from the velocity the constant-velocity model predicted, before this image's
