@@ -89,18 +89,30 @@ double MotionModel::speedSigma() const
 
 void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
 {
+  standing_ = position;
+  standing_cov_ = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
   moving_.tail<2>().setZero();
-  restartAt(position);
+  restartMoving(position);
   mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
   grid_log_ratio_ = 0.0;
 }
 
 void MotionModel::restartAt(const Eigen::Vector2d& position)
 {
+  // A standing object does not jump: either its estimate before the jump or this centre is off.
+  // The standing model takes both as equally likely, as the mean and covariance of the two,
+  // and the next centres tell which.
+  const Eigen::Matrix2d r = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d jump = position - standing_;
+  standing_ += 0.5 * jump;
+  standing_cov_ = 0.5 * (standing_cov_ + r) + 0.25 * jump * jump.transpose();
+  restartMoving(position);
+}
+
+void MotionModel::restartMoving(const Eigen::Vector2d& position)
+{
   const double r = config_.position_sigma * config_.position_sigma;
   const double v = config_.speed_sigma * config_.speed_sigma;
-  standing_ = position;
-  standing_cov_ = r * Eigen::Matrix2d::Identity();
   // On a restart the velocity was measured on the centres before the jump, which followed
   // another part of the object or another object's cells: its value stays the best guess, its
   // certainty goes back to the prior's.

@@ -74,11 +74,13 @@ public:
   /// (Re)starts the filters at `position` [m] with the prior velocity; the mode probability
   /// becomes `p_dynamic` ([0, 1]), e.g. 0.5 for a new object or the last value on a restart.
   void start(const Eigen::Vector2d& position, double p_dynamic);
-  /// Moves both filters to `position` [m] with the measurement's uncertainty, keeping the
-  /// velocity of the constant-velocity model and the mode probability: a jump of the centre
-  /// estimate (the visible part of the object changed) says nothing about the motion. The
-  /// velocity's uncertainty goes back to the prior's: it was measured on the centres before the
-  /// jump, which may have followed another part of the object or another object's cells.
+  /// A jump of the centre estimate to `position` [m] (the visible part of the object changed, or
+  /// its cells took another object's), which says nothing about the motion: the mode probability
+  /// stays. The constant-velocity model moves to `position` with the measurement's uncertainty
+  /// and keeps its velocity, whose uncertainty goes back to the prior's: it was measured on the
+  /// centres before the jump, which may have followed another part of the object or another
+  /// object's cells. The stationary model takes its estimate before the jump and `position` as
+  /// equally likely: it moves halfway, its covariance that of the two.
   void restartAt(const Eigen::Vector2d& position);
   /// Mixes the two models for a step of `dt` [s] (the mode may switch) and predicts both; dt <= 0
   /// leaves the filter unchanged.
@@ -120,6 +122,10 @@ public:
   const MotionModelConfig& config() const { return config_; }
 
 private:
+  /// The constant-velocity model at `position` with the measurement's uncertainty, its velocity
+  /// kept with the prior's uncertainty.
+  void restartMoving(const Eigen::Vector2d& position);
+
   MotionModelConfig config_;
   Eigen::Vector2d standing_ = Eigen::Vector2d::Zero();  ///< S: position
   Eigen::Matrix2d standing_cov_ = Eigen::Matrix2d::Identity();
