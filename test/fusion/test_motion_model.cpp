@@ -239,7 +239,8 @@ TEST(MotionModel, ARestartKeepsTheMotion)
   model.restartAt(Eigen::Vector2d(13.0, 0.0));
   EXPECT_DOUBLE_EQ(model.modeProbability(), before);
   EXPECT_NEAR(model.movingVelocity().x(), 5.0, 0.3);
-  // The constant-velocity model is at the new centre, the stationary one halfway (3 m back).
+  // The constant-velocity model is at the new centre, the stationary one halfway back to the
+  // centre before the 3 m jump.
   EXPECT_NEAR(model.state()(0), 13.0 - (1.0 - before) * 1.5, 0.1);
   model.predict(kDt);
   model.update(Eigen::Vector2d(13.5, 0.0));

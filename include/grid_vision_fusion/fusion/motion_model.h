@@ -71,8 +71,8 @@ public:
   /// @throws std::invalid_argument when `config` is invalid.
   explicit MotionModel(const MotionModelConfig& config = MotionModelConfig());
 
-  /// (Re)starts the filters at `position` [m] with the prior velocity; the mode probability
-  /// becomes `p_dynamic` ([0, 1]), e.g. 0.5 for a new object or the last value on a restart.
+  /// Starts the filters at `position` [m] with no velocity, the prior's uncertainty on it; the
+  /// mode probability becomes `p_dynamic` ([0, 1]), e.g. 0.5 for a new object.
   void start(const Eigen::Vector2d& position, double p_dynamic);
   /// A jump of the centre estimate to `position` [m] (the visible part of the object changed, or
   /// its cells took another object's), which says nothing about the motion: the mode probability
@@ -80,7 +80,7 @@ public:
   /// and keeps its velocity, whose uncertainty goes back to the prior's: it was measured on the
   /// centres before the jump, which may have followed another part of the object or another
   /// object's cells. The stationary model takes its estimate before the jump and `position` as
-  /// equally likely: it moves halfway, its covariance that of the two.
+  /// equally likely: it moves halfway, and its covariance spans both.
   void restartAt(const Eigen::Vector2d& position);
   /// Mixes the two models for a step of `dt` [s] (the mode may switch) and predicts both; dt <= 0
   /// leaves the filter unchanged.
