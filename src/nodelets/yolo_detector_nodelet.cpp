@@ -79,6 +79,17 @@ private:
   double score_threshold_ = 0.0;
   double nms_threshold_ = 0.0;
 
+  /// Whether the nodelet still lives, for the inference callbacks it posted on the manager's
+  /// multi-threaded queue: they hold it, the destructor clears it. The manager may delete a
+  /// nodelet from a worker thread after it has freed the nodelet's queues (at shutdown; ASan
+  /// saw the destructor read the freed queue), so the destructor does not touch the queue.
+  struct Lifetime
+  {
+    std::mutex mutex;  // held by a running inference
+    bool alive = true;
+  };
+  const std::shared_ptr<Lifetime> lifetime_ = std::make_shared<Lifetime>();
+
   // The frame slot between the image callback and the inference on the multi-threaded queue.
   std::mutex slot_mutex_;
   PendingFrame pending_;
@@ -106,8 +117,9 @@ private:
 YoloDetectorNodelet::~YoloDetectorNodelet()
 {
   sub_image_.shutdown();
-  // Waits for a running inference of this nodelet and drops the queued ones.
-  getMTCallbackQueue().removeByID(reinterpret_cast<std::uint64_t>(this));
+  // Waits for a running inference of this nodelet; the queued ones find it gone.
+  std::lock_guard<std::mutex> lock(lifetime_->mutex);
+  lifetime_->alive = false;
 }
 
 void YoloDetectorNodelet::onInit()
@@ -222,7 +234,15 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
   {
     // Inference runs on the manager's multi-threaded queue; this callback returns at once so
     // that the newest frame always replaces a waiting one.
-    getMTCallbackQueue().addCallback(boost::make_shared<FunctionCallback>([this] { processPending(); }),
+    auto run = [this, lifetime = lifetime_]
+    {
+      std::lock_guard<std::mutex> lock(lifetime->mutex);
+      if (lifetime->alive)
+      {
+        processPending();
+      }
+    };
+    getMTCallbackQueue().addCallback(boost::make_shared<FunctionCallback>(run),
                                      reinterpret_cast<std::uint64_t>(this));
   }
 }
