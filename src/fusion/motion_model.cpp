@@ -90,7 +90,7 @@ double MotionModel::speedSigma() const
 void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
 {
   standing_ = position;
-  standing_cov_ = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
+  standing_cov_ = positionNoise();
   moving_.tail<2>().setZero();
   restartMoving(position);
   mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
@@ -102,11 +102,15 @@ void MotionModel::restartAt(const Eigen::Vector2d& position)
   // A standing object does not jump: either its estimate before the jump or this centre is off.
   // The standing model takes both as equally likely, as the mean and covariance of the two,
   // and the next centres tell which.
-  const Eigen::Matrix2d r = config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
   const Eigen::Vector2d jump = position - standing_;
   standing_ += 0.5 * jump;
-  standing_cov_ = 0.5 * (standing_cov_ + r) + 0.25 * jump * jump.transpose();
+  standing_cov_ = 0.5 * (standing_cov_ + positionNoise()) + 0.25 * jump * jump.transpose();
   restartMoving(position);
+}
+
+Eigen::Matrix2d MotionModel::positionNoise() const
+{
+  return config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity();
 }
 
 void MotionModel::restartMoving(const Eigen::Vector2d& position)
@@ -183,8 +187,7 @@ void MotionModel::update(const Eigen::Vector2d& position)
 
 void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Matrix2d& extra_noise)
 {
-  const Eigen::Matrix2d r =
-      config_.position_sigma * config_.position_sigma * Eigen::Matrix2d::Identity() + extra_noise;
+  const Eigen::Matrix2d r = positionNoise() + extra_noise;
   // Likelihoods (IMM step 3), then each model's Kalman update.
   const Eigen::Vector2d nu_s = position - standing_;
   const Eigen::Matrix2d s_s = standing_cov_ + r;

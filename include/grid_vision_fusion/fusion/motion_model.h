@@ -122,6 +122,8 @@ public:
   const MotionModelConfig& config() const { return config_; }
 
 private:
+  /// The noise covariance of an observed centre [m²]: motion_position_sigma² on each axis.
+  Eigen::Matrix2d positionNoise() const;
   /// The constant-velocity model at `position` with the measurement's uncertainty, its velocity
   /// kept with the prior's uncertainty.
   void restartMoving(const Eigen::Vector2d& position);
