@@ -7,6 +7,7 @@
 #include <boost/make_shared.hpp>
 
 #include <atomic>
+#include <memory>
 #include <thread>
 
 #include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
@@ -174,8 +175,14 @@ TEST(TfWaitQueue, TheWakeupPollsOnTheCallbackQueueWhenATransformArrives)
   tf2::BufferCore buffer;
   Recorder r(buffer);
   ros::CallbackQueue callbacks;
+  int polls = 0;
   {
-    TfWaitWakeup wakeup(buffer, callbacks, [&] { r.queue.poll(); });
+    TfWaitWakeup wakeup(buffer, callbacks,
+                        [&]
+                        {
+                          ++polls;
+                          r.queue.poll();
+                        });
     r.queue.add(info(7.0));
     EXPECT_TRUE(callbacks.empty());
     setTf(buffer, "world", "camera", 6.9);
@@ -187,7 +194,28 @@ TEST(TfWaitQueue, TheWakeupPollsOnTheCallbackQueueWhenATransformArrives)
     setTf(buffer, "world", "camera", 7.1);
     EXPECT_FALSE(callbacks.empty());
   }
-  EXPECT_TRUE(callbacks.empty()) << "the wakeup removes its pending poll when it goes";
+  EXPECT_EQ(polls, 1);
+  callbacks.callAvailable();
+  EXPECT_EQ(polls, 1) << "a poll queued before the wakeup went does nothing";
+  setTf(buffer, "world", "camera", 7.2);
+  EXPECT_TRUE(callbacks.empty()) << "a gone wakeup no longer listens to tf";
+}
+
+TEST(TfWaitQueue, TheWakeupOutlivesItsCallbackQueueAtShutdown)
+{
+  // The nodelet manager may free a nodelet's callback queues before it deletes the nodelet: the
+  // wakeup must not touch its queue when it goes (the sanitizer build tells a read of the freed
+  // queue).
+  tf2::BufferCore buffer;
+  Recorder r(buffer);
+  auto callbacks = std::make_unique<ros::CallbackQueue>();
+  auto wakeup = std::make_unique<TfWaitWakeup>(buffer, *callbacks, [&] { r.queue.poll(); });
+  r.queue.add(info(7.0));
+  setTf(buffer, "world", "camera", 7.0);
+  EXPECT_FALSE(callbacks->empty());
+  callbacks.reset();
+  wakeup.reset();
+  EXPECT_TRUE(r.ready.empty());
 }
 
 }  // namespace grid_vision_fusion

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <utility>
@@ -193,46 +194,64 @@ class TfWaitWakeup
 {
 public:
   TfWaitWakeup(tf2::BufferCore& buffer, ros::CallbackQueueInterface& callbacks, std::function<void()> poll)
-      : buffer_(buffer), callbacks_(callbacks), poll_(std::move(poll))
+      : buffer_(buffer), callbacks_(callbacks), shared_(std::make_shared<Shared>(std::move(poll)))
   {
     connection_ = buffer_._addTransformsChangedListener([this] { wake(); });
   }
+  /// Waits for a running poll; a poll still queued finds the wakeup gone and does nothing. The
+  /// queue is not touched: at shutdown, the nodelet manager may have freed a nodelet's queues
+  /// before it deletes the nodelet.
   ~TfWaitWakeup()
   {
     buffer_._removeTransformsChangedListener(connection_);
-    callbacks_.removeByID(reinterpret_cast<std::uint64_t>(this));
+    std::lock_guard<std::mutex> lock(shared_->mutex);
+    shared_->alive = false;
   }
   TfWaitWakeup(const TfWaitWakeup&) = delete;
   TfWaitWakeup& operator=(const TfWaitWakeup&) = delete;
 
 private:
+  /// What the queued polls share with the wakeup, and keep when it is gone.
+  struct Shared
+  {
+    explicit Shared(std::function<void()> p) : poll(std::move(p)) {}
+    const std::function<void()> poll;
+    std::atomic<bool> pending{false};
+    std::mutex mutex;  // held by a running poll
+    bool alive = true;
+  };
+
   class PollCallback : public ros::CallbackInterface
   {
   public:
-    explicit PollCallback(TfWaitWakeup& owner) : owner_(owner) {}
+    explicit PollCallback(std::shared_ptr<Shared> shared) : shared_(std::move(shared)) {}
     CallResult call() override
     {
-      owner_.pending_.store(false);
-      owner_.poll_();
+      std::lock_guard<std::mutex> lock(shared_->mutex);
+      shared_->pending.store(false);
+      if (shared_->alive)
+      {
+        shared_->poll();
+      }
       return Success;
     }
 
   private:
-    TfWaitWakeup& owner_;
+    const std::shared_ptr<Shared> shared_;
   };
 
   void wake()
   {
-    if (!pending_.exchange(true))
+    if (!shared_->pending.exchange(true))
     {
-      callbacks_.addCallback(boost::make_shared<PollCallback>(*this), reinterpret_cast<std::uint64_t>(this));
+      callbacks_.addCallback(boost::make_shared<PollCallback>(shared_),
+                             reinterpret_cast<std::uint64_t>(this));
     }
   }
 
   tf2::BufferCore& buffer_;
   ros::CallbackQueueInterface& callbacks_;
-  const std::function<void()> poll_;
-  std::atomic<bool> pending_{false};
+  const std::shared_ptr<Shared> shared_;
   boost::signals2::connection connection_;
 };
 
