@@ -5,16 +5,13 @@
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
-#include <ros/callback_queue_interface.h>
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
-#include <boost/make_shared.hpp>
 #include <boost/thread/lock_guard.hpp>
 #include <boost/thread/mutex.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
 #include <chrono>
-#include <functional>
 #include <memory>
 #include <mutex>
 
@@ -23,28 +20,13 @@
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros_stages/detector_stage.h"
+#include "grid_vision_fusion/ros_sync/owned_callbacks.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
 constexpr double kThrottleS = 5.0;
-
-/// A callback for a ros::CallbackQueue that runs a function.
-class FunctionCallback : public ros::CallbackInterface
-{
-public:
-  explicit FunctionCallback(std::function<void()> function) : function_(std::move(function)) {}
-  CallResult call() override
-  {
-    function_();
-    return Success;
-  }
-
-private:
-  std::function<void()> function_;
-};
-
 }  // namespace
 
 class YoloDetectorNodelet : public nodelet::Nodelet
@@ -79,16 +61,10 @@ private:
   double score_threshold_ = 0.0;
   double nms_threshold_ = 0.0;
 
-  /// Whether the nodelet still lives, for the inference callbacks it posted on the manager's
-  /// multi-threaded queue: they hold it, the destructor clears it. The manager may delete a
-  /// nodelet from a worker thread after it has freed the nodelet's queues (at shutdown; ASan
-  /// saw the destructor read the freed queue), so the destructor does not touch the queue.
-  struct Lifetime
-  {
-    std::mutex mutex;  // held by a running inference
-    bool alive = true;
-  };
-  const std::shared_ptr<Lifetime> lifetime_ = std::make_shared<Lifetime>();
+  /// The inference callbacks on the manager's multi-threaded queue. The manager may delete a
+  /// nodelet from a worker thread after it has freed the nodelet's queues (at shutdown; ASan saw
+  /// a destructor read the freed queue), so the destructor does not touch the queue.
+  OwnedCallbacks inference_;
 
   // The frame slot between the image callback and the inference on the multi-threaded queue.
   std::mutex slot_mutex_;
@@ -117,9 +93,7 @@ private:
 YoloDetectorNodelet::~YoloDetectorNodelet()
 {
   sub_image_.shutdown();
-  // Waits for a running inference of this nodelet; the queued ones find it gone.
-  std::lock_guard<std::mutex> lock(lifetime_->mutex);
-  lifetime_->alive = false;
+  inference_.end();  // waits for a running inference; the queued ones do nothing
 }
 
 void YoloDetectorNodelet::onInit()
@@ -234,16 +208,8 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
   {
     // Inference runs on the manager's multi-threaded queue; this callback returns at once so
     // that the newest frame always replaces a waiting one.
-    auto run = [this, lifetime = lifetime_]
-    {
-      std::lock_guard<std::mutex> lock(lifetime->mutex);
-      if (lifetime->alive)
-      {
-        processPending();
-      }
-    };
-    getMTCallbackQueue().addCallback(boost::make_shared<FunctionCallback>(run),
-                                     reinterpret_cast<std::uint64_t>(this));
+    inference_.post(
+        getMTCallbackQueue(), [this] { processPending(); }, reinterpret_cast<std::uint64_t>(this));
   }
 }
 

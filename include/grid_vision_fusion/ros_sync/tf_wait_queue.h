@@ -5,7 +5,6 @@
 #include <ros/node_handle.h>
 #include <ros/time.h>
 #include <tf2/buffer_core.h>
-#include <boost/make_shared.hpp>
 #include <boost/shared_ptr.hpp>
 
 #include <algorithm>
@@ -13,11 +12,12 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <memory>
 #include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "grid_vision_fusion/ros_sync/owned_callbacks.h"
 
 namespace grid_vision_fusion
 {
@@ -194,64 +194,40 @@ class TfWaitWakeup
 {
 public:
   TfWaitWakeup(tf2::BufferCore& buffer, ros::CallbackQueueInterface& callbacks, std::function<void()> poll)
-      : buffer_(buffer), callbacks_(callbacks), shared_(std::make_shared<Shared>(std::move(poll)))
+      : buffer_(buffer), callbacks_(callbacks), poll_(std::move(poll))
   {
     connection_ = buffer_._addTransformsChangedListener([this] { wake(); });
   }
-  /// Waits for a running poll; a poll still queued finds the wakeup gone and does nothing. The
-  /// queue is not touched: at shutdown, the nodelet manager may have freed a nodelet's queues
-  /// before it deletes the nodelet.
+  /// Waits for a running poll; a poll still queued does nothing (OwnedCallbacks).
   ~TfWaitWakeup()
   {
     buffer_._removeTransformsChangedListener(connection_);
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    shared_->alive = false;
+    polls_.end();
   }
   TfWaitWakeup(const TfWaitWakeup&) = delete;
   TfWaitWakeup& operator=(const TfWaitWakeup&) = delete;
 
 private:
-  /// What the queued polls share with the wakeup, and keep when it is gone.
-  struct Shared
-  {
-    explicit Shared(std::function<void()> p) : poll(std::move(p)) {}
-    const std::function<void()> poll;
-    std::atomic<bool> pending{false};
-    std::mutex mutex;  // held by a running poll
-    bool alive = true;
-  };
-
-  class PollCallback : public ros::CallbackInterface
-  {
-  public:
-    explicit PollCallback(std::shared_ptr<Shared> shared) : shared_(std::move(shared)) {}
-    CallResult call() override
-    {
-      std::lock_guard<std::mutex> lock(shared_->mutex);
-      shared_->pending.store(false);
-      if (shared_->alive)
-      {
-        shared_->poll();
-      }
-      return Success;
-    }
-
-  private:
-    const std::shared_ptr<Shared> shared_;
-  };
-
   void wake()
   {
-    if (!shared_->pending.exchange(true))
+    if (!pending_.exchange(true))
     {
-      callbacks_.addCallback(boost::make_shared<PollCallback>(shared_),
-                             reinterpret_cast<std::uint64_t>(this));
+      polls_.post(
+          callbacks_,
+          [this]
+          {
+            pending_.store(false);
+            poll_();
+          },
+          reinterpret_cast<std::uint64_t>(this));
     }
   }
 
   tf2::BufferCore& buffer_;
   ros::CallbackQueueInterface& callbacks_;
-  const std::shared_ptr<Shared> shared_;
+  const std::function<void()> poll_;
+  std::atomic<bool> pending_{false};
+  OwnedCallbacks polls_;
   boost::signals2::connection connection_;
 };
 
