@@ -96,11 +96,13 @@ struct ProjectedPointsView
   /// Variances of the cell's velocity given dynamic [m²/s²]; optional (nullptr: not given).
   const float* v_var_x = nullptr;
   const float* v_var_y = nullptr;
+  /// The grid's cell size [m]: the step of the lattice x and y lie on; 0: not given.
+  double resolution = 0.0;
 };
 
 /// The view of any structure of arrays with members u, v, x, y, vx, vy (float vectors) and
-/// state (uint8 vector) of equal length, and scans_since_hit (uint8 vector, optional: empty or
-/// of that length), e.g. ProjectedPoints or a ProjectedGrid message.
+/// state (uint8 vector) of equal length, resolution (a number), and scans_since_hit (uint8
+/// vector, optional: empty or of that length), e.g. ProjectedPoints or a ProjectedGrid message.
 template <typename PointArrays>
 ProjectedPointsView pointsViewOf(const PointArrays& arrays)
 {
@@ -113,6 +115,7 @@ ProjectedPointsView pointsViewOf(const PointArrays& arrays)
   view.vx = arrays.vx.data();
   view.vy = arrays.vy.data();
   view.state = arrays.state.data();
+  view.resolution = arrays.resolution;
   if (arrays.scans_since_hit.size() == view.size && view.size > 0)
   {
     view.scans_since_hit = arrays.scans_since_hit.data();

@@ -310,6 +310,7 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
   const double threshold = config.occupied_threshold;
 
   ProjectedCells out;
+  out.resolution = grid.resolution;
   // Reserve for every candidate cell first: one cheap pass instead of repeated reallocations.
   out.reserve(candidateCells(grid, threshold) * static_cast<std::size_t>(column.points_per_cell));
   for (std::uint32_t row = 0; row < grid.height; ++row)

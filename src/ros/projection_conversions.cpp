@@ -120,6 +120,7 @@ ProjectedGrid::Ptr projectedGridToMsg(ProjectedCells&& cells, const std_msgs::He
   msg->grid_frame_id = grid_header.frame_id;
   msg->image_width = camera.width();
   msg->image_height = camera.height();
+  msg->resolution = static_cast<float>(cells.resolution);
   msg->u = std::move(cells.u);
   msg->v = std::move(cells.v);
   msg->depth = std::move(cells.depth);

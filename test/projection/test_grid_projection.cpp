@@ -441,6 +441,8 @@ TEST(GridProjection, ViewLendsTheArraysToTheFusion)
   EXPECT_EQ(view.u, cells.u.data());
   EXPECT_EQ(view.state, cells.state.data());
   EXPECT_EQ(view.vx[0], 3.F);
+  EXPECT_DOUBLE_EQ(view.resolution, grid.view().resolution);
+  EXPECT_GT(view.resolution, 0.0);
 }
 
 // --- Real KITTI object-benchmark frames ---------------------------------------------------------

@@ -47,6 +47,9 @@ TEST(FusionConversions, ViewBorrowsTheArrays)
   grid.scans_since_hit.assign(4, 0);
   view = viewOf(grid);
   EXPECT_EQ(view.scans_since_hit, grid.scans_since_hit.data());
+  EXPECT_EQ(view.resolution, 0.0);  // not given
+  grid.resolution = 0.2F;
+  EXPECT_FLOAT_EQ(static_cast<float>(viewOf(grid).resolution), 0.2F);
 }
 
 TEST(FusionConversions, TheCellAgesAreOptionalButNeverShort)

@@ -146,6 +146,7 @@ TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
   EXPECT_EQ(projected->header.stamp, kStamp);
   EXPECT_EQ(projected->header.frame_id, "camera");
   EXPECT_EQ(projected->grid_frame_id, "world");
+  EXPECT_EQ(projected->resolution, 1.0F) << "the grid's cell size, for the fusion's scan registration";
   EXPECT_GT(projected->u.size(), 0U);
   EXPECT_TRUE(projected->scans_since_hit.empty()) << "the grid carried no ages";
   // With the cells' ages, every point carries its cell's.

@@ -94,6 +94,8 @@ struct ProjectedPoints
   /// The cells' occupied masses and velocity variances; optional (empty: none given, add()
   /// leaves them so).
   std::vector<float> p_static, p_dynamic, v_var_x, v_var_y;
+  /// The grid's cell size [m] (0: not given).
+  double resolution = 0.0;
 
   /// Appends one point.
   void add(float pu, float pv, float px, float py, float pvx, float pvy, CellState s);

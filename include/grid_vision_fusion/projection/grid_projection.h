@@ -136,6 +136,9 @@ struct ProjectedCells
   /// Per point, the variances of the cell's velocity given dynamic [m²/s²]; empty without
   /// GridCellsView::v_var_x and v_var_y.
   std::vector<float> v_var_x, v_var_y;
+  /// The grid's cell size [m]: the lattice step of x and y (of static cells; dynamic cells are
+  /// moved to the image stamp).
+  double resolution = 0.0;
 
   std::size_t cells_selected = 0;  ///< cells that passed the occupancy threshold
   std::size_t cells_invalid =
