@@ -99,7 +99,8 @@ void render(const std::vector<Car>& cars, double t, std::mt19937& random, std::v
 
 /// Argument 0: cars in the image; argument 1: 0 = the per-frame fusion (fuse()), 1 = fuse() +
 /// estimateCentres() + trackObjects(), 2 = only what issue 12 adds: estimateCentres() +
-/// trackObjects() on a copy of the image's fuse() result made beforehand (the copy timed too).
+/// trackObjects() on a copy of the image's fuse() result made beforehand (the copy timed too),
+/// 3 = as 2 without the grid's cell size, so without the registration of the objects' hits.
 void BM_FusionPerImage(benchmark::State& state)
 {
   const std::vector<Car> cars = scene(static_cast<int>(state.range(0)));
@@ -116,6 +117,7 @@ void BM_FusionPerImage(benchmark::State& state)
   for (int k = 0; k < kImages; ++k)
   {
     render(cars, k * kFramePeriodS, random, detections[k], points[k]);
+    points[k].resolution = mode == 3 ? 0.0 : 0.2;
     fused[k] = fuse(detections[k], points[k].view(), config);
   }
   int k = 0;
@@ -123,7 +125,7 @@ void BM_FusionPerImage(benchmark::State& state)
   for (auto _ : state)
   {
     const ProjectedPointsView view = points[k].view();
-    FusionResult result = mode == 2 ? fused[k] : fuse(detections[k], view, config);
+    FusionResult result = mode >= 2 ? fused[k] : fuse(detections[k], view, config);
     if (mode != 0)
     {
       estimateCentres(result, detections[k], view, 0.0, 0.0, config.centre);
@@ -137,7 +139,7 @@ void BM_FusionPerImage(benchmark::State& state)
       benchmark::Counter(static_cast<double>(published), benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_FusionPerImage)
-    ->ArgsProduct({{10, 30, 60}, {0, 1, 2}})
+    ->ArgsProduct({{10, 30, 60}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);

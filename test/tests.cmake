@@ -26,6 +26,7 @@ gvf_gtest(test_projection
 gvf_gtest(test_fusion
   SOURCES test/fusion/test_fusion.cpp test/fusion/test_overlay.cpp test/fusion/test_assignment.cpp
     test/fusion/test_object_centre.cpp test/fusion/test_tracker.cpp test/fusion/test_motion_model.cpp
+    test/fusion/test_scan_registration.cpp
   LINK grid_vision_fusion_core)
 
 # --- workshop libraries ------------------------------------------------------------------------

@@ -95,6 +95,7 @@ void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
   restartMoving(position);
   mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
   grid_log_ratio_ = 0.0;
+  registration_log_ratio_ = 0.0;
 }
 
 void MotionModel::restartAt(const Eigen::Vector2d& position)
@@ -178,6 +179,7 @@ void MotionModel::predict(double dt)
   moving_cov_ = f * d0_cov * f.transpose() + noise;
   mu_dynamic_ = c_d;
   grid_log_ratio_ = 0.0;
+  registration_log_ratio_ = 0.0;
 }
 
 void MotionModel::update(const Eigen::Vector2d& position)
@@ -229,9 +231,20 @@ void MotionModel::updateGrid(const GridMotionEvidence& grid)
   moving_cov_ = 0.5 * (moving_cov_ + moving_cov_.transpose());
 }
 
+void MotionModel::updateRegistration(const std::vector<Eigen::Vector2d>& then,
+                                     const std::vector<Eigen::Vector2d>& now, double cell_size, double dt)
+{
+  const Eigen::Vector2d velocity = moving_.tail<2>();
+  const Eigen::Matrix2d velocity_cov = moving_cov_.bottomRightCorner<2, 2>();
+  // Shifts beyond five standard deviations of both modes' displacements weigh nothing.
+  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * cell_size;
+  const ShiftVotes votes(then, now, cell_size, reach);
+  registration_log_ratio_ = registrationLogRatio(votes, dt, velocity, velocity_cov);
+}
+
 double MotionModel::pDynamic() const
 {
-  return posterior(mu_dynamic_, 0.0, grid_log_ratio_);
+  return posterior(mu_dynamic_, 0.0, grid_log_ratio_ + registration_log_ratio_);
 }
 
 Eigen::Vector4d MotionModel::state() const

@@ -399,6 +399,111 @@ TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
   EXPECT_TRUE(cut.tracked);
 }
 
+TEST(Tracker, TrackObjectsRegistersTheHitsOfTheGridsScan)
+{
+  // A parked car that a passing truck uncovers: its side is revealed by 3 cells per image and
+  // its centre slides 0.3 m per image with the visible part; the grid's vote says nothing. Its
+  // rear face is hit at the same cells in every scan, which the registration of the cluster's
+  // hits sees once the projected grid gives its cell size. Cells of the cluster the lidar last
+  // hit 4 scans ago (a trail moving with the centre) are not hits and are not registered.
+  auto run = [](double resolution)
+  {
+    Tracker tracker;
+    std::vector<Detection> detections(1);
+    detections[0].label = "car";
+    detections[0].box = BoundingBox{500.F, 150.F, 700.F, 250.F};
+    double p_max = 0.0;
+    for (int k = 0; k < 8; ++k)
+    {
+      std::vector<float> x;
+      std::vector<float> y;
+      for (int j = 0; j < 9; ++j)  // the rear face
+      {
+        x.push_back(10.1F);
+        y.push_back(2.1F + 0.2F * static_cast<float>(j));
+      }
+      for (int i = 1; i <= 2 + 3 * k; ++i)  // the side revealed so far
+      {
+        x.push_back(10.1F + 0.2F * static_cast<float>(i));
+        y.push_back(2.1F);
+      }
+      std::vector<std::uint8_t> since_hit(x.size(), 0);
+      for (int i = 0; i < 25; ++i)  // the trail
+      {
+        x.push_back(11.1F + 0.4F * static_cast<float>(k) + 0.2F * static_cast<float>(i % 5));
+        y.push_back(3.9F + 0.2F * static_cast<float>(i / 5));
+        since_hit.push_back(4);
+      }
+      const std::vector<float> zeros(x.size(), 0.F);
+      const std::vector<std::uint8_t> states(x.size(), static_cast<std::uint8_t>(CellState::kStatic));
+      ProjectedPointsView points;
+      points.size = x.size();
+      points.u = points.v = points.vx = points.vy = zeros.data();
+      points.x = x.data();
+      points.y = y.data();
+      points.state = states.data();
+      points.scans_since_hit = since_hit.data();
+      points.resolution = resolution;
+      FusionResult result;
+      FusedObject object;
+      object.detection_index = 0;
+      object.x = 10.5 + 0.3 * k;
+      object.y = 2.9;
+      for (std::uint32_t i = 0; i < x.size(); ++i)
+      {
+        object.cluster.push_back(i);
+      }
+      result.objects = {object};
+      trackObjects(tracker, k * kFramePeriodS, detections, 1242, points, result);
+      if (k > 0)  // the first image has neither evidence
+      {
+        p_max = std::max(p_max, result.objects.at(0).p_dynamic);
+      }
+    }
+    return p_max;
+  };
+  EXPECT_GT(run(0.0), 0.5) << "without the cell size, the drifting centre reads as motion";
+  EXPECT_LT(run(0.2), 0.5);
+}
+
+TEST(Tracker, TheHitsOfABoxCutByTheImageEdgeAreNotRegistered)
+{
+  // The ego passes a parked bus whose box the image's left edge cuts: the cells of its side that
+  // the fusion band holds are those the image still shows, a window that slides with the ego
+  // (1 m per image) along the bus's texture-less side. Registered, they would move with the ego;
+  // a cut box says nothing along the object's length, and the bus stays static.
+  Tracker tracker;
+  auto side = [](int from)
+  {
+    std::vector<Eigen::Vector2d> hits;
+    for (int i = 0; i < 25; ++i)
+    {
+      hits.emplace_back(8.1 + 0.2 * (from + i), 4.1);
+    }
+    return hits;
+  };
+  int k = 0;
+  for (; k < 10; ++k)
+  {
+    TrackObservation o = observe("car", 9.0, 4.5, 300.F);
+    o.hits = side(0);
+    o.cell_size = 0.2;
+    tracker.update(k * kFramePeriodS, {o});
+  }
+  for (int j = 1; j <= 6; ++j, ++k)
+  {
+    TrackObservation o = observe("car", 9.0 + 0.5 * j, 4.5, 30.F);
+    o.box.x_min = 0.F;
+    o.truncated = true;
+    o.length_yaw = 0.0;
+    o.hidden_length = 1.0 * j;
+    o.hits = side(5 * j);
+    o.cell_size = 0.2;
+    const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];
+    EXPECT_EQ(e.motion, Motion::kStatic) << "image " << j << " of the cut box";
+  }
+}
+
 TEST(Tracker, OnlyLabelsOfOneGroupAreAssociated)
 {
   Tracker tracker;

@@ -24,10 +24,17 @@
 //     al., IJRR 2018, as a likelihood): t(ĝ; 0, Σ) under S, t(ĝ; v_D, Σ + P_v) under D, with D's
 //     velocity v_D and covariance P_v as predicted before this image; ĝ then updates v_D (noise
 //     Σ / r̄), so that a mover's particles start its velocity before its centres can.
-// P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S).
+// The object's lidar hits speak once per image too: their registration against the track's hits
+// of a few scans before (scan_registration.h) gives a likelihood ratio of D against S that no
+// drift of the centre estimate enters.
+// P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S), L the likelihoods of the grid and the hits.
 #pragma once
 
+#include "grid_vision_fusion/fusion/scan_registration.h"
+
 #include <Eigen/Core>
+
+#include <vector>
 
 namespace grid_vision_fusion
 {
@@ -98,10 +105,19 @@ public:
   /// updated with the grid's (noise: its spread over the dynamic share). The mode probability
   /// itself does not change: the grid's own filter integrates over time already.
   void updateGrid(const GridMotionEvidence& grid);
+  /// Takes in the registration of the object's lidar hits in an earlier scan `dt` [s] ago and in
+  /// this image's (scan_registration.h): its likelihood ratio of D against S, from the velocity the
+  /// constant-velocity model has now, which pDynamic() applies. Like the grid's, this evidence is
+  /// not accumulated (the registrations of consecutive images share scans).
+  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; no evidence without a
+  /// hit in either scan, a lattice, or dt > 0.
+  void updateRegistration(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
+                          double cell_size, double dt);
 
   /// P(dynamic) of the centres alone (the filter's mode probability).
   double modeProbability() const { return mu_dynamic_; }
-  /// P(dynamic) with the grid's evidence of the latest updateGrid() since the last predict().
+  /// P(dynamic) with the grid's evidence and the hits' registration of the latest updateGrid()
+  /// and updateRegistration() since the last predict().
   double pDynamic() const;
 
   /// The combined estimate (x, y, vx, vy) [m, m/s]: the models' means weighted by their
@@ -134,7 +150,8 @@ private:
   Eigen::Vector4d moving_ = Eigen::Vector4d::Zero();  ///< D: position, velocity
   Eigen::Matrix4d moving_cov_ = Eigen::Matrix4d::Identity();
   double mu_dynamic_ = 0.5;
-  double grid_log_ratio_ = 0.0;  ///< log L(D) − log L(S) of the grid at the latest image
+  double grid_log_ratio_ = 0.0;          ///< log L(D) − log L(S) of the grid at the latest image
+  double registration_log_ratio_ = 0.0;  ///< the same of the hits' registration
 };
 
 /// Log-density of a bivariate Student-t with ν = 1 (Cauchy) and scale matrix `scale` at

@@ -22,6 +22,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <string>
 #include <vector>
@@ -89,6 +90,11 @@ struct TrackObservation
   /// The cells of the object's cluster [m], fixed frame: what the track expects to continue in
   /// the next image (priors()).
   std::vector<Eigen::Vector2d> cells;
+  /// The cells of the cluster that the lidar hit in the grid's scan [m], fixed frame, on the
+  /// grid's lattice of step cell_size [m] (0: not known): registered against the track's earlier
+  /// hits (scan_registration.h).
+  std::vector<Eigen::Vector2d> hits;
+  double cell_size = 0.0;
   GridMotionEvidence grid;  ///< what the grid says about the object's motion
 };
 
@@ -167,6 +173,13 @@ private:
     BoundingBox box() const;
   };
 
+  /// The lidar hits of a track's object in one image.
+  struct ObservedHits
+  {
+    double stamp = 0.0;  ///< [s]
+    std::vector<Eigen::Vector2d> cells;
+  };
+
   struct Track
   {
     std::uint32_t id = 0;
@@ -177,7 +190,10 @@ private:
     BoundingBox box;                     ///< the detector's box in its last image
     BoxFilter box_filter;                ///< the filtered box
     std::vector<Eigen::Vector2d> cells;  ///< of its object's cluster in its last image
-    double last_seen = 0.0;              ///< stamp of its last image with an object [s]
+    /// Its objects' lidar hits of the last images, oldest first, within
+    /// kRegistrationSpan of the latest.
+    std::deque<ObservedHits> recent_hits;
+    double last_seen = 0.0;  ///< stamp of its last image with an object [s]
     int hits = 0;
     int misses = 0;
     bool confirmed = false;
@@ -187,8 +203,13 @@ private:
   /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
   /// optimal assignment.
   std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
-  /// A matched track takes its observation: the centre (or a restart there), the grid's evidence.
+  /// A matched track takes its observation: the centre (or a restart there), the grid's evidence,
+  /// the registration of its hits.
   void updateTrack(Track& track, const TrackObservation& observation) const;
+  /// The registration of the observation's lidar hits against the track's oldest hits within
+  /// kRegistrationSpan, into the track's motion model; then the observation's hits join the
+  /// track's.
+  void registerHits(Track& track, const TrackObservation& observation) const;
   /// A tentative track for an observation left over.
   Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;

@@ -1,0 +1,166 @@
+// Unit tests of the scan registration of an object's lidar hits: the overlap per lattice shift,
+// the likelihood ratio of moving against standing it gives (a shape that stays, a shape that
+// moves as predicted, a side revealed further), bad input, and the motion model taking it in.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "grid_vision_fusion/fusion/motion_model.h"
+#include "grid_vision_fusion/fusion/scan_registration.h"
+
+namespace grid_vision_fusion
+{
+namespace
+{
+constexpr double kCell = 0.2;
+
+/// The hits of a car's rear face (along y, 9 cells) and its left side (along x, `side` cells) on
+/// the 0.2 m lattice, the corner at (x0, y0) shifted by (dx, dy) cells.
+std::vector<Eigen::Vector2d> carCorner(int side, int dx = 0, int dy = 0, double x0 = 10.1, double y0 = 2.1)
+{
+  std::vector<Eigen::Vector2d> hits;
+  for (int j = 0; j < 9; ++j)
+  {
+    hits.emplace_back(x0 + dx * kCell, y0 + (dy + j) * kCell);
+  }
+  for (int i = 1; i <= side; ++i)
+  {
+    hits.emplace_back(x0 + (dx + i) * kCell, y0 + dy * kCell);
+  }
+  return hits;
+}
+
+}  // namespace
+
+TEST(ShiftVotes, CountsTheHitsEachShiftExplains)
+{
+  const std::vector<Eigen::Vector2d> then = carCorner(10);
+  const ShiftVotes votes(then, carCorner(10, 3, -1), kCell, 5.0);
+  EXPECT_EQ(votes.overlap(3, -1), 19);
+  EXPECT_EQ(votes.maxOverlap(), 19);
+  EXPECT_LT(votes.overlap(0, 0), 3);
+
+  // Positions off the lattice by less than half a cell (a dynamic cell moved to the image stamp)
+  // still vote for their shift.
+  std::vector<Eigen::Vector2d> jittered = carCorner(10, 3, -1);
+  for (Eigen::Vector2d& p : jittered)
+  {
+    p += Eigen::Vector2d(0.07, -0.05);
+  }
+  EXPECT_EQ(ShiftVotes(then, jittered, kCell, 5.0).overlap(3, -1), 19);
+
+  // Shifts beyond max_shift are not counted.
+  EXPECT_EQ(ShiftVotes(then, carCorner(10, 60, 0), kCell, 5.0).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes(then, carCorner(10, 60, 0), kCell, 13.0).overlap(60, 0), 19);
+}
+
+TEST(ShiftVotes, BadInputGivesNoVotes)
+{
+  const std::vector<Eigen::Vector2d> hits = carCorner(5);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(ShiftVotes(hits, hits, 0.0, 5.0).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes(hits, hits, -0.2, 5.0).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes(hits, hits, nan, 5.0).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes(hits, hits, kCell, nan).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes({}, hits, kCell, 5.0).maxOverlap(), 0);
+  // Too many pairs to count in bounded time: no votes, no evidence.
+  std::vector<Eigen::Vector2d> wall;
+  for (int i = 0; i < 401; ++i)
+  {
+    wall.emplace_back(30.1, -40.1 + kCell * i);
+  }
+  EXPECT_EQ(ShiftVotes(wall, wall, kCell, 5.0).maxOverlap(), 0);
+  wall.pop_back();
+  EXPECT_EQ(ShiftVotes(wall, wall, kCell, 5.0).maxOverlap(), 400);
+  std::vector<Eigen::Vector2d> with_nan = hits;
+  with_nan[0].x() = nan;
+  EXPECT_EQ(ShiftVotes(hits, with_nan, kCell, 5.0).maxOverlap(), static_cast<int>(hits.size()) - 1);
+  EXPECT_EQ(registrationLogRatio(ShiftVotes({}, hits, kCell, 5.0), 0.3, Eigen::Vector2d(5.0, 0.0),
+                                 Eigen::Matrix2d::Identity()),
+            0.0);
+}
+
+TEST(ScanRegistration, AShapeThatStaysSaysStandingAndOneThatMovesSaysMoving)
+{
+  // The constant-velocity model believes in 5 m/s along x, give or take 1 m/s; 0.3 s apart.
+  const Eigen::Vector2d velocity(5.0, 0.0);
+  const Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+  const double stays =
+      registrationLogRatio(ShiftVotes(carCorner(10), carCorner(10), kCell, 5.0), 0.3, velocity, cov);
+  EXPECT_LT(stays, -3.0);
+  // Moved by 1.4 m (7 cells): as predicted.
+  const double moves =
+      registrationLogRatio(ShiftVotes(carCorner(10), carCorner(10, 7, 0), kCell, 5.0), 0.3, velocity, cov);
+  EXPECT_GT(moves, 3.0);
+  // A side revealed further (a parked car a passing truck uncovers) while its rear face stays:
+  // standing, whatever its centre does.
+  EXPECT_LT(registrationLogRatio(ShiftVotes(carCorner(4), carCorner(12), kCell, 5.0), 0.3, velocity, cov),
+            -3.0);
+  // Without time or velocity, no evidence.
+  EXPECT_EQ(registrationLogRatio(ShiftVotes(carCorner(10), carCorner(10), kCell, 5.0), 0.0, velocity, cov),
+            0.0);
+  EXPECT_EQ(registrationLogRatio(ShiftVotes(carCorner(10), carCorner(10), kCell, 5.0), 0.3,
+                                 Eigen::Vector2d(std::numeric_limits<double>::quiet_NaN(), 0.0), cov),
+            0.0);
+}
+
+TEST(MotionModel, TheHitsRegistrationKeepsARevealedStandingObjectStatic)
+{
+  // A parked car uncovered by a passing truck: its side is revealed by 3 cells per image and
+  // its centre estimate slides 0.3 m per image with the visible part, which the centres alone
+  // take for motion. Its rear face is hit at the same place in every scan.
+  auto run = [](bool registration)
+  {
+    MotionModel model;
+    model.start(Eigen::Vector2d(10.5, 2.9), 0.5);
+    std::vector<std::vector<Eigen::Vector2d>> hits{carCorner(2)};
+    double p = 0.0;
+    for (int k = 1; k <= 6; ++k)
+    {
+      model.predict(0.1);
+      model.update(Eigen::Vector2d(10.5 + 0.3 * k, 2.9));
+      hits.push_back(carCorner(2 + 3 * k));
+      if (registration)
+      {
+        const std::size_t then = hits.size() >= 4 ? hits.size() - 4 : 0;
+        model.updateRegistration(hits[then], hits.back(), kCell,
+                                 0.1 * static_cast<double>(hits.size() - 1 - then));
+      }
+      p = std::max(p, model.pDynamic());
+    }
+    return p;
+  };
+  EXPECT_GT(run(false), 0.5) << "the centres alone take the revealed side for motion";
+  EXPECT_LT(run(true), 0.5);
+}
+
+TEST(MotionModel, TheHitsRegistrationConfirmsAMover)
+{
+  // A car moving at 2 m/s: its hits shift by a cell per image and its centre with them.
+  MotionModel with;
+  MotionModel without;
+  with.start(Eigen::Vector2d(10.5, 2.9), 0.5);
+  without.start(Eigen::Vector2d(10.5, 2.9), 0.5);
+  std::vector<std::vector<Eigen::Vector2d>> hits{carCorner(10)};
+  for (int k = 1; k <= 4; ++k)
+  {
+    for (MotionModel* model : {&with, &without})
+    {
+      model->predict(0.1);
+      model->update(Eigen::Vector2d(10.5 + 0.2 * k, 2.9));
+    }
+    hits.push_back(carCorner(10, k, 0));
+    const std::size_t then = hits.size() >= 4 ? hits.size() - 4 : 0;
+    with.updateRegistration(hits[then], hits.back(), kCell,
+                            0.1 * static_cast<double>(hits.size() - 1 - then));
+  }
+  EXPECT_GT(with.pDynamic(), 0.9);
+  EXPECT_GT(with.pDynamic(), without.pDynamic());
+  // The evidence holds for one image: the next predict() forgets it.
+  with.predict(0.1);
+  EXPECT_DOUBLE_EQ(with.pDynamic(), with.modeProbability());
+}
+
+}  // namespace grid_vision_fusion
