@@ -9,16 +9,32 @@ namespace grid_vision_fusion
 {
 namespace
 {
-/// Probability mass of the lattice cell at `shift` [m] (cell area `area` [m²]) under N(mean, cov),
-/// at most 1.
-double latticeMass(const Eigen::Vector2d& shift, const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov,
-                   double area)
+/// A normal distribution over the lattice: the probability mass of the cell at a shift [m].
+class LatticeNormal
 {
-  const Eigen::Vector2d d = shift - mean;
-  const double density =
-      std::exp(-0.5 * d.dot(cov.ldlt().solve(d))) / (2.0 * M_PI * std::sqrt(cov.determinant()));
-  return std::min(1.0, density * area);
-}
+public:
+  LatticeNormal(const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov, double cell_area)
+      : mean_(mean),
+        information_(cov.inverse()),
+        scale_(cell_area / (2.0 * M_PI * std::sqrt(cov.determinant())))
+  {
+  }
+
+  /// At most 1 (a lattice cell much larger than the spread); 0 beyond kNegligible standard
+  /// deviations, where it is below exp(−kNegligible² / 2) of the peak's.
+  double mass(const Eigen::Vector2d& shift) const
+  {
+    const Eigen::Vector2d d = shift - mean_;
+    const double d2 = d.dot(information_ * d);
+    return d2 > kNegligible * kNegligible ? 0.0 : std::min(1.0, scale_ * std::exp(-0.5 * d2));
+  }
+
+private:
+  static constexpr double kNegligible = 8.0;
+  Eigen::Vector2d mean_;
+  Eigen::Matrix2d information_;
+  double scale_;
+};
 }  // namespace
 
 ShiftVotes::ShiftVotes(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
@@ -30,30 +46,59 @@ ShiftVotes::ShiftVotes(const std::vector<Eigen::Vector2d>& then, const std::vect
   {
     return;
   }
-  const double limit = std::min(max_shift / cell_size, static_cast<double>(kOffset - 1));
-  for (const Eigen::Vector2d& b : now)
+  window_ = static_cast<int>(std::min(max_shift / cell_size, static_cast<double>(kMaxWindow)));
+  const int side = 2 * window_ + 1;
+  counts_.assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), 0);
+  // Lattice coordinates from a common origin (one of then's hits): a pair's shift is then the
+  // difference of two integers, and hits off the lattice by a common offset (dynamic cells moved
+  // to the image stamp) round alike.
+  const auto first_finite =
+      std::find_if(then.begin(), then.end(), [](const Eigen::Vector2d& hit) { return hit.allFinite(); });
+  const Eigen::Vector2d origin = first_finite == then.end() ? Eigen::Vector2d::Zero() : *first_finite;
+  auto latticeOf = [&](const std::vector<Eigen::Vector2d>& hits)
   {
-    for (const Eigen::Vector2d& a : then)
+    std::vector<Eigen::Vector2i> cells;
+    cells.reserve(hits.size());
+    for (const Eigen::Vector2d& hit : hits)
     {
-      const double dx = std::round((b.x() - a.x()) / cell_size);
-      const double dy = std::round((b.y() - a.y()) / cell_size);
-      if (!(std::abs(dx) <= limit) || !(std::abs(dy) <= limit))
+      const Eigen::Vector2d c = ((hit - origin) / cell_size).array().round();
+      if (c.allFinite() && c.cwiseAbs().maxCoeff() < 1e9)
       {
-        continue;  // also NaN
+        cells.emplace_back(static_cast<int>(c.x()), static_cast<int>(c.y()));
       }
-      const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<int>(dx) + kOffset) << 32) |
-                                static_cast<std::uint64_t>(static_cast<int>(dy) + kOffset);
-      max_overlap_ = std::max(max_overlap_, ++counts_[key]);
+    }
+    return cells;
+  };
+  const std::vector<Eigen::Vector2i> before = latticeOf(then);
+  const std::vector<Eigen::Vector2i> after = latticeOf(now);
+  for (const Eigen::Vector2i& b : after)
+  {
+    for (const Eigen::Vector2i& a : before)
+    {
+      const int dx = b.x() - a.x();
+      const int dy = b.y() - a.y();
+      if (std::abs(dx) > window_ || std::abs(dy) > window_)
+      {
+        continue;
+      }
+      const int index = (dy + window_) * side + dx + window_;
+      int& count = counts_[static_cast<std::size_t>(index)];
+      if (count++ == 0)
+      {
+        shifts_.push_back(index);
+      }
+      max_overlap_ = std::max(max_overlap_, count);
     }
   }
 }
 
 int ShiftVotes::overlap(int dx, int dy) const
 {
-  const std::uint64_t key =
-      (static_cast<std::uint64_t>(dx + kOffset) << 32) | static_cast<std::uint64_t>(dy + kOffset);
-  const auto it = counts_.find(key);
-  return it == counts_.end() ? 0 : it->second;
+  if (counts_.empty() || std::abs(dx) > window_ || std::abs(dy) > window_)
+  {
+    return 0;
+  }
+  return counts_[static_cast<std::size_t>((dy + window_) * (2 * window_ + 1) + dx + window_)];
 }
 
 double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vector2d& velocity,
@@ -66,8 +111,8 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
   }
   const double area = cell * cell;
   const Eigen::Matrix2d quantisation = area / 6.0 * Eigen::Matrix2d::Identity();
-  const Eigen::Vector2d moving_mean = velocity * dt;
-  const Eigen::Matrix2d moving_cov = dt * dt * velocity_cov + quantisation;
+  const LatticeNormal standing_shift(Eigen::Vector2d::Zero(), quantisation, area);
+  const LatticeNormal moving_shift(velocity * dt, dt * dt * velocity_cov + quantisation, area);
   // Σ_t P(t | mode) · exp(overlap(t) − max overlap): shifts without an overlap weigh
   // exp(−max overlap) each, i.e. that times the mass of the whole lattice (1) ...
   const double floor = std::exp(-static_cast<double>(votes.maxOverlap()));
@@ -78,9 +123,14 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
       [&](int dx, int dy, int count)
       {
         const Eigen::Vector2d shift(dx * cell, dy * cell);
-        const double extra = std::exp(static_cast<double>(count - votes.maxOverlap())) - floor;
-        standing += latticeMass(shift, Eigen::Vector2d::Zero(), quantisation, area) * extra;
-        moving += latticeMass(shift, moving_mean, moving_cov, area) * extra;
+        const double standing_mass = standing_shift.mass(shift);
+        const double moving_mass = moving_shift.mass(shift);
+        if (standing_mass > 0.0 || moving_mass > 0.0)
+        {
+          const double extra = std::exp(static_cast<double>(count - votes.maxOverlap())) - floor;
+          standing += standing_mass * extra;
+          moving += moving_mass * extra;
+        }
       });
   constexpr double kTiny = 1e-300;
   return std::log(std::max(moving, kTiny)) - std::log(std::max(standing, kTiny));

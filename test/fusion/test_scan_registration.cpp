@@ -41,6 +41,7 @@ TEST(ShiftVotes, CountsTheHitsEachShiftExplains)
   EXPECT_EQ(votes.overlap(3, -1), 19);
   EXPECT_EQ(votes.maxOverlap(), 19);
   EXPECT_LT(votes.overlap(0, 0), 3);
+  EXPECT_EQ(votes.overlap(std::numeric_limits<int>::max(), std::numeric_limits<int>::min()), 0);
 
   // Positions off the lattice by less than half a cell (a dynamic cell moved to the image stamp)
   // still vote for their shift.
@@ -77,6 +78,7 @@ TEST(ShiftVotes, BadInputGivesNoVotes)
   std::vector<Eigen::Vector2d> with_nan = hits;
   with_nan[0].x() = nan;
   EXPECT_EQ(ShiftVotes(hits, with_nan, kCell, 5.0).maxOverlap(), static_cast<int>(hits.size()) - 1);
+  EXPECT_EQ(ShiftVotes(with_nan, hits, kCell, 5.0).maxOverlap(), static_cast<int>(hits.size()) - 1);
   EXPECT_EQ(registrationLogRatio(ShiftVotes({}, hits, kCell, 5.0), 0.3, Eigen::Vector2d(5.0, 0.0),
                                  Eigen::Matrix2d::Identity()),
             0.0);

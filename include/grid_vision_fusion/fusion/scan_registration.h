@@ -20,8 +20,6 @@
 #include <Eigen/Core>
 
 #include <cstddef>
-#include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 namespace grid_vision_fusion
@@ -32,14 +30,16 @@ class ShiftVotes
 public:
   /// Counts, for every lattice shift s, the hits of `now` that a hit of `then` moved by s
   /// explains; positions in metres (fixed frame), `cell_size` the lattice's step [m] (> 0).
-  /// Shifts farther than `max_shift` [m] on either axis are not counted. Nothing is counted for
-  /// more than kMaxPairs pairs (a wall of thousands of cells in one box: no evidence, in bounded
-  /// time) or a cell size that is not finite and > 0.
+  /// Shifts farther than `max_shift` [m] (at most kMaxWindow cells) on either axis are not
+  /// counted. Nothing is counted for more than kMaxPairs pairs (a wall of thousands of cells in
+  /// one box: no evidence, in bounded time) or a cell size that is not finite and > 0.
   ShiftVotes(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
              double cell_size, double max_shift);
 
   /// Most pairs of hits counted: 400 hits per scan, more than a truck's outline at 5 m.
   static constexpr std::size_t kMaxPairs = 160000;
+  /// Farthest shift counted [cells]: 20 m on the 0.2 m grid.
+  static constexpr int kMaxWindow = 100;
 
   /// Overlap of the shift (dx, dy) [cells].
   int overlap(int dx, int dy) const;
@@ -51,15 +51,17 @@ public:
   template <typename F>
   void forEach(F&& f) const
   {
-    for (const auto& [key, count] : counts_)
+    const int side = 2 * window_ + 1;
+    for (const int index : shifts_)
     {
-      f(static_cast<int>(key >> 32) - kOffset, static_cast<int>(key & 0xffffffffU) - kOffset, count);
+      f(index % side - window_, index / side - window_, counts_[static_cast<std::size_t>(index)]);
     }
   }
 
 private:
-  static constexpr int kOffset = 1 << 20;
-  std::unordered_map<std::uint64_t, int> counts_;
+  int window_ = 0;           ///< shifts counted: |dx|, |dy| <= window_ [cells]
+  std::vector<int> counts_;  ///< overlap per shift, row-major over dy then dx
+  std::vector<int> shifts_;  ///< the indices of counts_ with an overlap, in the order first seen
   int max_overlap_ = 0;
   double cell_size_ = 0.0;
 };
