@@ -112,10 +112,27 @@ TEST(GridForImage, TheNextCameraInfoEndsTheWait)
   // A late grid of an earlier sweep does not complete it.
   EXPECT_TRUE(pairing.addGrid(grid(0.1)).empty());
   EXPECT_EQ(stamps(pairing.addGrid(grid(0.2))), (Stamps{{0.2, 0.2}}));
-  // No grid at all: the waiting camera_info is given up with an empty grid.
+}
+
+TEST(GridForImage, CameraInfosWaitForTheFirstGridEvenPastTheNextCameraInfo)
+{
+  // The first grid is the slowest (the filter starts, the first scan's tf comes late): the first
+  // camera_infos wait for it instead of being given up with nothing when the next one arrives.
+  Pairing pairing(0.05);
+  EXPECT_TRUE(pairing.addInfo(info(0.0)).empty());
+  EXPECT_TRUE(pairing.addInfo(info(0.1)).empty());
+  EXPECT_EQ(stamps(pairing.addGrid(grid(0.0))), (Stamps{{0.0, 0.0}}));
+  EXPECT_EQ(pairing.waiting(), 1U);  // 0.1 waits for its own sweep's grid, as usual
+  EXPECT_EQ(stamps(pairing.addGrid(grid(0.1))), (Stamps{{0.1, 0.1}}));
+  // No grid at all: the oldest camera_info is given up with an empty grid once more than
+  // kMaxWaitingForFirstGrid wait.
   Pairing empty(0.05);
-  EXPECT_TRUE(empty.addInfo(info(0.0)).empty());
-  EXPECT_EQ(stamps(empty.addInfo(info(0.1))), (Stamps{{0.0, -1.0}}));
+  for (std::size_t k = 0; k < Pairing::kMaxWaitingForFirstGrid; ++k)
+  {
+    EXPECT_TRUE(empty.addInfo(info(0.1 * static_cast<double>(k))).empty());
+  }
+  EXPECT_EQ(stamps(empty.addInfo(info(1.0))), (Stamps{{0.0, -1.0}}));
+  EXPECT_EQ(empty.waiting(), Pairing::kMaxWaitingForFirstGrid);
 }
 
 TEST(GridForImage, ANegativeToleranceNeverWaits)

@@ -20,10 +20,12 @@ namespace grid_vision_fusion
 /// grid at once would project the previous sweep's, moved forward by its velocities. So a
 /// camera_info waits while the newest grid received is stamped more than `tolerance` before it,
 /// until a grid within `tolerance` (or after it) arrives, or until the next camera_info does (the
-/// lidar is a whole frame late, or silent): then the waiting one takes what is there. A negative
-/// tolerance never waits. A grid stamped before the newest kept one (time went backwards: a bag
-/// loop) pairs the waiting camera_infos with the old grids, then replaces them.
-/// Thread-safe.
+/// lidar is a whole frame late, or silent): then the waiting one takes what is there. Before the
+/// first grid there is nothing to take, and the first grid is the slowest (the filter starts, the
+/// tf of the first scan may come late): camera_infos wait for it, the oldest given up (with no
+/// grid) only when more than kMaxWaitingForFirstGrid wait. A negative tolerance never waits. A grid stamped
+/// before the newest kept one (time went backwards: a bag loop) pairs the waiting camera_infos with the old
+/// grids, then replaces them. Thread-safe.
 template <typename Grid, typename Info>
 class GridForImage
 {
@@ -38,6 +40,9 @@ public:
     GridPtr grid;
   };
 
+  /// Most camera_infos that wait for the first grid: a second of images at 10 Hz.
+  static constexpr std::size_t kMaxWaitingForFirstGrid = 10;
+
   /// `tolerance_s` finite [s]; `grids_kept` >= 1 most recent grids are candidates.
   explicit GridForImage(double tolerance_s, std::size_t grids_kept = 4)
       : tolerance_(tolerance_s < 0.0 ? -1.0 : tolerance_s), grids_kept_(grids_kept < 1 ? 1 : grids_kept)
@@ -50,6 +55,16 @@ public:
   {
     std::lock_guard<std::mutex> lock(mutex_);
     std::vector<Pair> out;
+    if (grids_.empty() && tolerance_ >= 0.0)
+    {
+      waiting_.push_back(info);
+      while (waiting_.size() > kMaxWaitingForFirstGrid)
+      {
+        out.push_back({waiting_.front(), GridPtr()});
+        waiting_.pop_front();
+      }
+      return out;
+    }
     pairAllWaiting(out);
     if (complete(info->header.stamp))
     {
