@@ -234,12 +234,8 @@ void MotionModel::updateGrid(const GridMotionEvidence& grid)
 void MotionModel::updateRegistration(const std::vector<Eigen::Vector2d>& then,
                                      const std::vector<Eigen::Vector2d>& now, double cell_size, double dt)
 {
-  const Eigen::Vector2d velocity = moving_.tail<2>();
-  const Eigen::Matrix2d velocity_cov = moving_cov_.bottomRightCorner<2, 2>();
-  // Shifts beyond five standard deviations of both modes' displacements weigh nothing.
-  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * cell_size;
-  const ShiftVotes votes(then, now, cell_size, reach);
-  registration_log_ratio_ = registrationLogRatio(votes, dt, velocity, velocity_cov);
+  registration_log_ratio_ = registrationLogRatio(then, now, cell_size, dt, moving_.tail<2>(),
+                                                 moving_cov_.bottomRightCorner<2, 2>());
 }
 
 double MotionModel::pDynamic() const

@@ -41,8 +41,8 @@ ShiftVotes::ShiftVotes(const std::vector<Eigen::Vector2d>& then, const std::vect
                        double cell_size, double max_shift)
     : cell_size_(cell_size)
 {
-  if (!(cell_size > 0.0) || !std::isfinite(cell_size) || !(max_shift >= 0.0) ||
-      then.size() * now.size() > kMaxPairs)
+  if (!(cell_size > 0.0) || !std::isfinite(cell_size) || !(max_shift >= 0.0) || then.size() < kMinHits ||
+      now.size() < kMinHits || then.size() * now.size() > kMaxPairs)
   {
     return;
   }
@@ -134,6 +134,15 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
       });
   constexpr double kTiny = 1e-300;
   return std::log(std::max(moving, kTiny)) - std::log(std::max(standing, kTiny));
+}
+
+double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
+                            double cell_size, double dt, const Eigen::Vector2d& velocity,
+                            const Eigen::Matrix2d& velocity_cov)
+{
+  // Shifts beyond these weigh less than exp(−12.5) of their mode's peak.
+  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * cell_size;
+  return registrationLogRatio(ShiftVotes(then, now, cell_size, reach), dt, velocity, velocity_cov);
 }
 
 }  // namespace grid_vision_fusion

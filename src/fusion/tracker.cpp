@@ -31,8 +31,6 @@ constexpr float kTruncationMarginPx = 1.F;
 constexpr double kRegistrationSpan = 0.3;
 /// Slack on that span for stamps that jitter [s].
 constexpr double kRegistrationSlack = 0.02;
-/// Fewest hits in each scan for a registration: fewer say nothing of a shape.
-constexpr std::size_t kMinRegistrationHits = 3;
 
 /// What a box cut by the image edge adds to its centre's noise [m²]: along the object's length
 /// the centre is the visible part's, off by up to half the length its cells miss. Zero for a box
@@ -359,9 +357,7 @@ void Tracker::registerHits(Track& track, const TrackObservation& obs) const
   {
     track.recent_hits.pop_front();
   }
-  if (!obs.truncated && !track.recent_hits.empty() &&
-      track.recent_hits.front().cells.size() >= kMinRegistrationHits &&
-      obs.hits.size() >= kMinRegistrationHits)
+  if (!obs.truncated && !track.recent_hits.empty())
   {
     const ObservedHits& then = track.recent_hits.front();
     track.motion.updateRegistration(then.cells, obs.hits, obs.cell_size, last_stamp_ - then.stamp);

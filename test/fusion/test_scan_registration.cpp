@@ -66,6 +66,12 @@ TEST(ShiftVotes, BadInputGivesNoVotes)
   EXPECT_EQ(ShiftVotes(hits, hits, nan, 5.0).maxOverlap(), 0);
   EXPECT_EQ(ShiftVotes(hits, hits, kCell, nan).maxOverlap(), 0);
   EXPECT_EQ(ShiftVotes({}, hits, kCell, 5.0).maxOverlap(), 0);
+  // Fewer than kMinHits in either scan say nothing of a shape.
+  const std::vector<Eigen::Vector2d> two(hits.begin(), hits.begin() + 2);
+  EXPECT_EQ(ShiftVotes(two, hits, kCell, 5.0).maxOverlap(), 0);
+  EXPECT_EQ(ShiftVotes(hits, two, kCell, 5.0).maxOverlap(), 0);
+  const std::vector<Eigen::Vector2d> three(hits.begin(), hits.begin() + 3);
+  EXPECT_EQ(ShiftVotes(three, hits, kCell, 5.0).maxOverlap(), 3);
   // Too many pairs to count in bounded time: no votes, no evidence.
   std::vector<Eigen::Vector2d> wall;
   for (int i = 0; i < 401; ++i)

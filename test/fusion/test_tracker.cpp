@@ -48,6 +48,16 @@ TrackObservation observe(const std::string& label, double x, double y, float u)
   return o;
 }
 
+/// `o` with its box cut by the image's left edge, along x, its cells missing `hidden_length` [m].
+TrackObservation cutByTheLeftEdge(TrackObservation o, double hidden_length)
+{
+  o.box.x_min = 0.F;
+  o.truncated = true;
+  o.length_yaw = 0.0;
+  o.hidden_length = hidden_length;
+  return o;
+}
+
 /// An observation moving at (vx, vy), the grid agreeing.
 TrackObservation moving(const std::string& label, double x, double y, float u, double vx, double vy)
 {
@@ -299,11 +309,7 @@ TEST(Tracker, AParkedCarLeavingTheImageIsNotTakenForAMover)
   }
   for (int j = 1; j <= 12; ++j, ++k)
   {
-    TrackObservation o = observe("car", 8.0 + 0.225 * j, 4.0, 30.F);
-    o.box.x_min = 0.F;
-    o.truncated = true;
-    o.length_yaw = 0.0;
-    o.hidden_length = 0.45 * j;
+    const TrackObservation o = cutByTheLeftEdge(observe("car", 8.0 + 0.225 * j, 4.0, 30.F), 0.45 * j);
     const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];
     EXPECT_EQ(e.motion, Motion::kStatic) << "image " << j << " of the cut box";
     EXPECT_LT(e.x - 8.0, 0.4 * (0.225 * j) + 0.05)
@@ -492,11 +498,7 @@ TEST(Tracker, TheHitsOfABoxCutByTheImageEdgeAreNotRegistered)
   }
   for (int j = 1; j <= 6; ++j, ++k)
   {
-    TrackObservation o = observe("car", 9.0 + 0.5 * j, 4.5, 30.F);
-    o.box.x_min = 0.F;
-    o.truncated = true;
-    o.length_yaw = 0.0;
-    o.hidden_length = 1.0 * j;
+    TrackObservation o = cutByTheLeftEdge(observe("car", 9.0 + 0.5 * j, 4.5, 30.F), 1.0 * j);
     o.hits = side(5 * j);
     o.cell_size = 0.2;
     const TrackEstimate e = tracker.update(k * kFramePeriodS, {o})[0];

@@ -109,8 +109,8 @@ public:
   /// this image's (scan_registration.h): its likelihood ratio of D against S, from the velocity the
   /// constant-velocity model has now, which pDynamic() applies. Like the grid's, this evidence is
   /// not accumulated (the registrations of consecutive images share scans).
-  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; no evidence without a
-  /// hit in either scan, a lattice, or dt > 0.
+  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; no evidence without
+  /// enough hits in either scan, a lattice, or dt > 0 (registrationLogRatio()).
   void updateRegistration(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
                           double cell_size, double dt);
 

@@ -32,10 +32,13 @@ public:
   /// explains; positions in metres (fixed frame), `cell_size` the lattice's step [m] (> 0).
   /// Shifts farther than `max_shift` [m] (at most kMaxWindow cells) on either axis are not
   /// counted. Nothing is counted for more than kMaxPairs pairs (a wall of thousands of cells in
-  /// one box: no evidence, in bounded time) or a cell size that is not finite and > 0.
+  /// one box: no evidence, in bounded time), fewer than kMinHits hits in either scan (they say
+  /// nothing of a shape) or a cell size that is not finite and > 0.
   ShiftVotes(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
              double cell_size, double max_shift);
 
+  /// Fewest hits in each scan for any vote.
+  static constexpr std::size_t kMinHits = 3;
   /// Most pairs of hits counted: 400 hits per scan, more than a truck's outline at 5 m.
   static constexpr std::size_t kMaxPairs = 160000;
   /// Farthest shift counted [cells]: 20 m on the 0.2 m grid.
@@ -70,6 +73,11 @@ private:
 /// `dt` [s] apart (see the file comment): `velocity` [m/s] and `velocity_cov` [m²/s²] are the
 /// constant-velocity model's. 0 (no evidence) when dt <= 0 or either scan has no hit.
 double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vector2d& velocity,
+                            const Eigen::Matrix2d& velocity_cov);
+/// The same from the two scans' hits (ShiftVotes' arguments), counting the shifts within five
+/// standard deviations of either mode's displacement (and five cells).
+double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
+                            double cell_size, double dt, const Eigen::Vector2d& velocity,
                             const Eigen::Matrix2d& velocity_cov);
 
 }  // namespace grid_vision_fusion

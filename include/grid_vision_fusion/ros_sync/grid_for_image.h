@@ -23,9 +23,9 @@ namespace grid_vision_fusion
 /// lidar is a whole frame late, or silent): then the waiting one takes what is there. Before the
 /// first grid there is nothing to take, and the first grid is the slowest (the filter starts, the
 /// tf of the first scan may come late): camera_infos wait for it, the oldest given up (with no
-/// grid) only when more than kMaxWaitingForFirstGrid wait. A negative tolerance never waits. A grid stamped
-/// before the newest kept one (time went backwards: a bag loop) pairs the waiting camera_infos with the old
-/// grids, then replaces them. Thread-safe.
+/// grid) only when more than kMaxWaitingForFirstGrid wait. A negative tolerance never waits. A
+/// grid stamped before the newest kept one (time went backwards: a bag loop) pairs the waiting
+/// camera_infos with the old grids, then replaces them. Thread-safe.
 template <typename Grid, typename Info>
 class GridForImage
 {
