@@ -37,6 +37,21 @@ double logAdd(double a, double b)
   return high + std::log1p(std::exp(std::min(a, b) - high));
 }
 
+/// Log-likelihood ratio of D to S of a vote for D with weight `vote` in [0, 1] that errs with
+/// probability `error`.
+double voteLogRatio(double vote, double error)
+{
+  const double p = error + (1.0 - 2.0 * error) * vote;
+  return std::log(p) - std::log(1.0 - p);
+}
+
+/// The log-likelihood ratio `ratio` of evidence that errs with probability `error`: its vote is
+/// the probability of D it gives from even odds.
+double errs(double ratio, double error)
+{
+  return voteLogRatio(1.0 / (1.0 + std::exp(-ratio)), error);
+}
+
 /// The probability of D from the log-likelihoods of the two modes and the prior P(D).
 double posterior(double prior_dynamic, double log_l_static, double log_l_dynamic)
 {
@@ -209,10 +224,8 @@ void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Matrix2d&
 
 void MotionModel::updateGrid(const GridMotionEvidence& grid)
 {
-  const double eps = config_.grid_error;
   const double share = std::isfinite(grid.dynamic_share) ? std::clamp(grid.dynamic_share, 0.0, 1.0) : 0.5;
-  const double vote = eps + (1.0 - 2.0 * eps) * share;
-  grid_log_ratio_ = std::log(vote) - std::log(1.0 - vote);
+  grid_log_ratio_ = voteLogRatio(share, config_.grid_error);
   if (!grid.has_velocity || !grid.velocity.allFinite() || !grid.velocity_variance.allFinite())
   {
     return;
@@ -232,10 +245,12 @@ void MotionModel::updateGrid(const GridMotionEvidence& grid)
 }
 
 void MotionModel::updateRegistration(const std::vector<Eigen::Vector2d>& then,
-                                     const std::vector<Eigen::Vector2d>& now, double cell_size, double dt)
+                                     const std::vector<Eigen::Vector2d>& now, double cell_size, double dt,
+                                     const Eigen::Matrix2d& unseen)
 {
-  registration_log_ratio_ = registrationLogRatio(then, now, cell_size, dt, moving_.tail<2>(),
-                                                 moving_cov_.bottomRightCorner<2, 2>());
+  const double ratio = registrationLogRatio(then, now, cell_size, dt, moving_.tail<2>(),
+                                            moving_cov_.bottomRightCorner<2, 2>(), unseen);
+  registration_log_ratio_ = errs(ratio, config_.grid_error);
 }
 
 double MotionModel::pDynamic() const

@@ -102,17 +102,19 @@ int ShiftVotes::overlap(int dx, int dy) const
 }
 
 double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vector2d& velocity,
-                            const Eigen::Matrix2d& velocity_cov)
+                            const Eigen::Matrix2d& velocity_cov, const Eigen::Matrix2d& unseen)
 {
   const double cell = votes.cellSize();
-  if (!(dt > 0.0) || votes.maxOverlap() == 0 || !velocity.allFinite() || !velocity_cov.allFinite())
+  if (!(dt > 0.0) || votes.maxOverlap() == 0 || !velocity.allFinite() || !velocity_cov.allFinite() ||
+      !unseen.allFinite())
   {
     return 0.0;
   }
   const double area = cell * cell;
-  const Eigen::Matrix2d quantisation = area / 6.0 * Eigen::Matrix2d::Identity();
-  const LatticeNormal standing_shift(Eigen::Vector2d::Zero(), quantisation, area);
-  const LatticeNormal moving_shift(velocity * dt, dt * dt * velocity_cov + quantisation, area);
+  // Either mode's displacement is blurred by the lattice's quantisation and what the hits cannot show.
+  const Eigen::Matrix2d blur = area / 6.0 * Eigen::Matrix2d::Identity() + unseen;
+  const LatticeNormal standing_shift(Eigen::Vector2d::Zero(), blur, area);
+  const LatticeNormal moving_shift(velocity * dt, dt * dt * velocity_cov + blur, area);
   // Σ_t P(t | mode) · exp(overlap(t) − max overlap): shifts without an overlap weigh
   // exp(−max overlap) each, i.e. that times the mass of the whole lattice (1) ...
   const double floor = std::exp(-static_cast<double>(votes.maxOverlap()));
@@ -138,11 +140,12 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
 
 double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
                             double cell_size, double dt, const Eigen::Vector2d& velocity,
-                            const Eigen::Matrix2d& velocity_cov)
+                            const Eigen::Matrix2d& velocity_cov, const Eigen::Matrix2d& unseen)
 {
   // Shifts beyond these weigh less than exp(−12.5) of their mode's peak.
-  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * cell_size;
-  return registrationLogRatio(ShiftVotes(then, now, cell_size, reach), dt, velocity, velocity_cov);
+  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) +
+                       5.0 * std::sqrt(unseen.trace()) + 5.0 * cell_size;
+  return registrationLogRatio(ShiftVotes(then, now, cell_size, reach), dt, velocity, velocity_cov, unseen);
 }
 
 }  // namespace grid_vision_fusion

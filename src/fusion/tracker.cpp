@@ -357,10 +357,13 @@ void Tracker::registerHits(Track& track, const TrackObservation& obs) const
   {
     track.recent_hits.pop_front();
   }
-  if (!obs.truncated && !track.recent_hits.empty())
+  if (!track.recent_hits.empty())
   {
+    // A cut box's hits are those the image still shows: a window that slides along the object's
+    // length, over which they say nothing (cutNoise(), as for its centre).
     const ObservedHits& then = track.recent_hits.front();
-    track.motion.updateRegistration(then.cells, obs.hits, obs.cell_size, last_stamp_ - then.stamp);
+    track.motion.updateRegistration(then.cells, obs.hits, obs.cell_size, last_stamp_ - then.stamp,
+                                    cutNoise(obs));
   }
   track.recent_hits.push_back({last_stamp_, obs.hits});
 }

@@ -114,12 +114,71 @@ TEST(ScanRegistration, AShapeThatStaysSaysStandingAndOneThatMovesSaysMoving)
             0.0);
 }
 
+TEST(ScanRegistration, WhatTheHitsCannotShowSaysNothing)
+{
+  // A long texture-less side along x (a bus's, 25 cells) seen through a window that slides 1 m
+  // (5 cells) along it in 0.3 s, as the image edge cuts it while the ego passes: the window's
+  // shift explains every hit and reads as motion. Told that the hits cannot show a displacement
+  // along x (2.5 m, a hidden half of its length), the registration weighs only the displacement
+  // across the side, which is none: standing.
+  auto side = [](int from)
+  {
+    std::vector<Eigen::Vector2d> hits;
+    for (int i = 0; i < 25; ++i)
+    {
+      hits.emplace_back(8.1 + kCell * (from + i), 4.1);
+    }
+    return hits;
+  };
+  // The constant-velocity model has taken the sliding centre's 3.3 m/s along x.
+  const Eigen::Vector2d velocity(3.3, 0.0);
+  const Eigen::Matrix2d cov = Eigen::Matrix2d::Identity();
+  EXPECT_GT(registrationLogRatio(side(0), side(5), kCell, 0.3, velocity, cov), 2.0);
+  Eigen::Matrix2d along_x = Eigen::Matrix2d::Zero();
+  along_x(0, 0) = 2.5 * 2.5;
+  EXPECT_LT(registrationLogRatio(side(0), side(5), kCell, 0.3, velocity, cov, along_x), -1.0);
+  // A side that moves across itself still says moving.
+  std::vector<Eigen::Vector2d> across = side(5);
+  for (Eigen::Vector2d& hit : across)
+  {
+    hit.y() += 5 * kCell;
+  }
+  EXPECT_GT(registrationLogRatio(side(0), across, kCell, 0.3, velocity, cov, along_x), 3.0);
+  // A covariance that is not finite gives no evidence.
+  along_x(0, 0) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(registrationLogRatio(side(0), side(5), kCell, 0.3, velocity, cov, along_x), 0.0);
+}
+
+TEST(MotionModel, OneRegistrationMovesTheOddsAtMostByTheGridsErrorRate)
+{
+  // 19 hits shifted by 7 cells: alone, many nats for moving. Its vote errs like the grid's, so from
+  // even odds it gives P(dynamic) up to 1 − ε, and a shape that stays down to ε, no further.
+  for (const double error : {0.05, 0.2})
+  {
+    MotionModelConfig config;
+    config.grid_error = error;
+    MotionModel moves(config);
+    moves.start(Eigen::Vector2d(10.5, 2.9), 0.5);
+    moves.updateRegistration(carCorner(10), carCorner(10, 7, 0), kCell, 0.3);
+    EXPECT_LE(moves.pDynamic(), 1.0 - error);
+    EXPECT_GT(moves.pDynamic(), 1.0 - error - 0.01);
+    MotionModel stays(config);
+    stays.start(Eigen::Vector2d(10.5, 2.9), 0.5);
+    stays.updateRegistration(carCorner(10), carCorner(10), kCell, 0.3);
+    EXPECT_GE(stays.pDynamic(), error);
+    EXPECT_LT(stays.pDynamic(), error + 0.01);
+  }
+}
+
 TEST(MotionModel, TheHitsRegistrationKeepsARevealedStandingObjectStatic)
 {
   // A parked car uncovered by a passing truck: its side is revealed by 3 cells per image and
-  // its centre estimate slides 0.3 m per image with the visible part, which the centres alone
-  // take for motion. Its rear face is hit at the same place in every scan.
-  auto run = [](bool registration)
+  // its centre estimate slides 0.3 m per image with the visible part, which the centres take for
+  // motion, more strongly than the grid's static cells say standing. Its rear face is hit at the
+  // same place in every scan.
+  GridMotionEvidence static_cells;
+  static_cells.dynamic_share = 0.1;
+  auto run = [&static_cells](bool registration)
   {
     MotionModel model;
     model.start(Eigen::Vector2d(10.5, 2.9), 0.5);
@@ -129,6 +188,7 @@ TEST(MotionModel, TheHitsRegistrationKeepsARevealedStandingObjectStatic)
     {
       model.predict(0.1);
       model.update(Eigen::Vector2d(10.5 + 0.3 * k, 2.9));
+      model.updateGrid(static_cells);
       hits.push_back(carCorner(2 + 3 * k));
       if (registration)
       {
@@ -140,7 +200,7 @@ TEST(MotionModel, TheHitsRegistrationKeepsARevealedStandingObjectStatic)
     }
     return p;
   };
-  EXPECT_GT(run(false), 0.5) << "the centres alone take the revealed side for motion";
+  EXPECT_GT(run(false), 0.5) << "the centres and the grid take the revealed side for motion";
   EXPECT_LT(run(true), 0.5);
 }
 

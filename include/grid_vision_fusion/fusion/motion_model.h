@@ -26,7 +26,9 @@
 //     Σ / r̄), so that a mover's particles start its velocity before its centres can.
 // The object's lidar hits speak once per image too: their registration against the track's hits
 // of a few scans before (scan_registration.h) gives a likelihood ratio of D against S that no
-// drift of the centre estimate enters.
+// drift of the centre estimate enters. The hits are the grid's cells, and their vote errs like
+// the grid's: with probability grid_error (a cluster that holds another object's cells, a shape
+// that changes), so that one registration moves the odds by at most (1 − ε) / ε.
 // P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S), L the likelihoods of the grid and the hits.
 #pragma once
 
@@ -51,7 +53,8 @@ struct MotionModelConfig
   double speed_sigma = 3.0;
   /// Mean time between two changes of the motion mode [s], > 0: the inertia of the verdict.
   double switch_time = 2.0;
-  /// Probability that the grid's dynamic share of an object points the wrong way, (0, 0.5).
+  /// Probability that a vote of the grid points the wrong way, (0, 0.5): the dynamic share of an
+  /// object's cells, and the registration of its hit cells.
   double grid_error = 0.05;
 
   /// @throws std::invalid_argument naming the first bad field (as the ranges above).
@@ -107,12 +110,15 @@ public:
   void updateGrid(const GridMotionEvidence& grid);
   /// Takes in the registration of the object's lidar hits in an earlier scan `dt` [s] ago and in
   /// this image's (scan_registration.h): its likelihood ratio of D against S, from the velocity the
-  /// constant-velocity model has now, which pDynamic() applies. Like the grid's, this evidence is
-  /// not accumulated (the registrations of consecutive images share scans).
-  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; no evidence without
-  /// enough hits in either scan, a lattice, or dt > 0 (registrationLogRatio()).
+  /// constant-velocity model has now, as a vote that errs with probability grid_error, which
+  /// pDynamic() applies. Like the grid's, this evidence is not accumulated (the registrations of
+  /// consecutive images share scans).
+  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; `unseen` [m²] is the
+  /// displacement they cannot show (registrationLogRatio()); no evidence without enough hits in
+  /// either scan, a lattice, or dt > 0.
   void updateRegistration(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
-                          double cell_size, double dt);
+                          double cell_size, double dt,
+                          const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
 
   /// P(dynamic) of the centres alone (the filter's mode probability).
   double modeProbability() const { return mu_dynamic_; }

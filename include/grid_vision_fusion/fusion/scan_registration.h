@@ -14,7 +14,9 @@
 // model's velocity v with covariance P_v, where Q = cell² / 6 · I is the lattice's quantisation of
 // the two scans. Shapes that fit several shifts as well (the long side of a vehicle moving along
 // itself) spread their likelihood over those shifts and say little; a shape that fits only one
-// shift says much.
+// shift says much. A displacement the hits cannot show (along an object cut by the image edge,
+// whose visible part is a window sliding along it) blurs both modes alike: only the displacement
+// across it is weighed.
 #pragma once
 
 #include <Eigen/Core>
@@ -71,13 +73,17 @@ private:
 
 /// Log-likelihood ratio of moving against standing from the registration of two scans' hits
 /// `dt` [s] apart (see the file comment): `velocity` [m/s] and `velocity_cov` [m²/s²] are the
-/// constant-velocity model's. 0 (no evidence) when dt <= 0 or either scan has no hit.
+/// constant-velocity model's. `unseen` [m²] is a displacement the hits cannot show, added to
+/// both modes' (along the length of an object cut by the image edge, whose visible part slides
+/// along it). 0 (no evidence) when dt <= 0 or either scan has no hit.
 double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vector2d& velocity,
-                            const Eigen::Matrix2d& velocity_cov);
+                            const Eigen::Matrix2d& velocity_cov,
+                            const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
 /// The same from the two scans' hits (ShiftVotes' arguments), counting the shifts within five
 /// standard deviations of either mode's displacement (and five cells).
 double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
                             double cell_size, double dt, const Eigen::Vector2d& velocity,
-                            const Eigen::Matrix2d& velocity_cov);
+                            const Eigen::Matrix2d& velocity_cov,
+                            const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
 
 }  // namespace grid_vision_fusion
