@@ -9,10 +9,6 @@ namespace grid_vision_fusion
 {
 namespace
 {
-/// β, the log-likelihood of a hit explained (doc/nodelets/fusion.md, "Motion model": the value
-/// with the lowest Brier score of the published P(dynamic) on the scenario suite).
-constexpr double kNatsPerHit = 2.0;
-
 /// A normal distribution over the lattice: the probability mass of the cell at a shift [m].
 class LatticeNormal
 {
@@ -119,9 +115,9 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
   const Eigen::Matrix2d blur = area / 6.0 * Eigen::Matrix2d::Identity() + unseen;
   const LatticeNormal standing_shift(Eigen::Vector2d::Zero(), blur, area);
   const LatticeNormal moving_shift(velocity * dt, dt * dt * velocity_cov + blur, area);
-  // Σ_t P(t | mode) · exp(β (overlap(t) − max overlap)): shifts without an overlap weigh
-  // exp(−β max overlap) each, i.e. that times the mass of the whole lattice (1) ...
-  const double floor = std::exp(-kNatsPerHit * static_cast<double>(votes.maxOverlap()));
+  // Σ_t P(t | mode) · exp(overlap(t) − max overlap): shifts without an overlap weigh
+  // exp(−max overlap) each, i.e. that times the mass of the whole lattice (1) ...
+  const double floor = std::exp(-static_cast<double>(votes.maxOverlap()));
   double standing = floor;
   double moving = floor;
   // ... plus, for each shift with an overlap, its mass times the rest of its weight.
@@ -133,8 +129,7 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
         const double moving_mass = moving_shift.mass(shift);
         if (standing_mass > 0.0 || moving_mass > 0.0)
         {
-          const double extra =
-              std::exp(kNatsPerHit * static_cast<double>(count - votes.maxOverlap())) - floor;
+          const double extra = std::exp(static_cast<double>(count - votes.maxOverlap())) - floor;
           standing += standing_mass * extra;
           moving += moving_mass * extra;
         }

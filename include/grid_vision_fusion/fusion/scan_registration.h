@@ -9,7 +9,7 @@
 // The hits of each scan lie on the grid's lattice. Every pair (a hit now, a hit then) votes for
 // the lattice shift between them; a shift's votes are the hits of now that a hit of then, moved by
 // that shift, explains: its overlap. The likelihood of a displacement t is taken as
-// exp(β overlap(t)) (β = 2 nats per hit explained) and marginalised over the displacements each motion
+// exp(overlap(t)) (one nat per hit explained) and marginalised over the displacements each motion
 // mode predicts: t ~ N(0, Q) standing, t ~ N(v·Δt, Δt² P_v + Q) moving at the constant-velocity
 // model's velocity v with covariance P_v, where Q = cell² / 6 · I is the lattice's quantisation of
 // the two scans. Shapes that fit several shifts as well (the long side of a vehicle moving along
