@@ -248,8 +248,8 @@ void MotionModel::updateRegistration(const std::vector<Eigen::Vector2d>& then,
                                      const std::vector<Eigen::Vector2d>& now, double cell_size, double dt,
                                      const Eigen::Matrix2d& unseen)
 {
-  const double ratio = registrationLogRatio(then, now, cell_size, dt, moving_.tail<2>(),
-                                            moving_cov_.bottomRightCorner<2, 2>(), unseen);
+  const double ratio =
+      registrationLogRatio(then, now, cell_size, dt, movingVelocity(), movingVelocityCovariance(), unseen);
   registration_log_ratio_ = errs(ratio, config_.grid_error);
 }
 

@@ -138,13 +138,19 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
   return std::log(std::max(moving, kTiny)) - std::log(std::max(standing, kTiny));
 }
 
+double registrationReach(double cell_size, double dt, const Eigen::Vector2d& velocity,
+                         const Eigen::Matrix2d& velocity_cov, const Eigen::Matrix2d& unseen)
+{
+  // Shifts beyond these weigh less than exp(−12.5) of their mode's peak.
+  return dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * std::sqrt(unseen.trace()) +
+         5.0 * cell_size;
+}
+
 double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
                             double cell_size, double dt, const Eigen::Vector2d& velocity,
                             const Eigen::Matrix2d& velocity_cov, const Eigen::Matrix2d& unseen)
 {
-  // Shifts beyond these weigh less than exp(−12.5) of their mode's peak.
-  const double reach = dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) +
-                       5.0 * std::sqrt(unseen.trace()) + 5.0 * cell_size;
+  const double reach = registrationReach(cell_size, dt, velocity, velocity_cov, unseen);
   return registrationLogRatio(ShiftVotes(then, now, cell_size, reach), dt, velocity, velocity_cov, unseen);
 }
 

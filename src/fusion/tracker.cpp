@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "grid_vision_fusion/fusion/assignment.h"
 
@@ -44,6 +45,13 @@ Eigen::Matrix2d cutNoise(const TrackObservation& observation)
   const Eigen::Vector2d length(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
   const double offset = 0.5 * observation.hidden_length;
   return offset * offset * length * length.transpose();
+}
+
+/// Whether the lidar hit the cell of point `i` in the grid's scan (every point, where the view does
+/// not say).
+bool isHit(const ProjectedPointsView& points, std::size_t i)
+{
+  return points.scans_since_hit == nullptr || points.scans_since_hit[i] == 0;
 }
 
 /// The edges (x_min, y_min, x_max, y_max) of `box` [px].
@@ -133,6 +141,7 @@ void Tracker::setConfig(const TrackerConfig& config)
 void Tracker::reset()
 {
   tracks_.clear();
+  scene_hits_.clear();
   has_stamp_ = false;
 }
 
@@ -245,7 +254,8 @@ TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
   return e;
 }
 
-std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<TrackObservation>& observations)
+std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<TrackObservation>& observations,
+                                           std::vector<Eigen::Vector2d> scene_hits)
 {
   if (has_stamp_ && (stamp_s < last_stamp_ || stamp_s - last_stamp_ > config_.max_gap))
   {
@@ -288,6 +298,12 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const Track& track) { return track.misses > config_.max_misses; }),
                 tracks_.end());
+  const double oldest = stamp_s - kRegistrationSpan - kRegistrationSlack;
+  while (!scene_hits_.empty() && scene_hits_.front().stamp < oldest)
+  {
+    scene_hits_.pop_front();
+  }
+  scene_hits_.push_back({stamp_s, std::move(scene_hits)});
   return estimates;
 }
 
@@ -385,8 +401,42 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   track.first_stamp = stamp_s;
   track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
   track.motion.updateGrid(obs.grid);
-  track.recent_hits.push_back({stamp_s, obs.hits});
+  track.recent_hits = hitsBefore(obs, track.motion);
+  registerHits(track, obs);
   return track;
+}
+
+std::deque<Tracker::ObservedHits> Tracker::hitsBefore(const TrackObservation& obs,
+                                                      const MotionModel& motion) const
+{
+  std::deque<ObservedHits> before;
+  if (obs.hits.empty())
+  {
+    return before;
+  }
+  Eigen::Vector2d low = obs.hits.front();
+  Eigen::Vector2d high = low;
+  for (const Eigen::Vector2d& hit : obs.hits)
+  {
+    low = low.cwiseMin(hit);
+    high = high.cwiseMax(hit);
+  }
+  const Eigen::Matrix2d unseen = cutNoise(obs);
+  for (const ObservedHits& scan : scene_hits_)
+  {
+    const double reach = registrationReach(obs.cell_size, last_stamp_ - scan.stamp, motion.movingVelocity(),
+                                           motion.movingVelocityCovariance(), unseen);
+    ObservedHits near{scan.stamp, {}};
+    for (const Eigen::Vector2d& hit : scan.cells)
+    {
+      if ((hit.array() >= low.array() - reach).all() && (hit.array() <= high.array() + reach).all())
+      {
+        near.cells.push_back(hit);
+      }
+    }
+    before.push_back(std::move(near));
+  }
+  return before;
 }
 
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
@@ -413,7 +463,7 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     for (std::uint32_t i : object.cluster)
     {
       o.cells.emplace_back(points.x[i], points.y[i]);
-      if (points.scans_since_hit == nullptr || points.scans_since_hit[i] == 0)
+      if (isHit(points, i))
       {
         o.hits.emplace_back(points.x[i], points.y[i]);
       }
@@ -421,7 +471,16 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     o.cell_size = points.resolution;
     observations.push_back(std::move(o));
   }
-  const std::vector<TrackEstimate> estimates = tracker.update(stamp_s, observations);
+  std::vector<Eigen::Vector2d> scene_hits;
+  scene_hits.reserve(points.size);
+  for (std::size_t i = 0; i < points.size; ++i)
+  {
+    if (isHit(points, i))
+    {
+      scene_hits.emplace_back(points.x[i], points.y[i]);
+    }
+  }
+  const std::vector<TrackEstimate> estimates = tracker.update(stamp_s, observations, std::move(scene_hits));
   for (std::size_t i = 0; i < result.objects.size(); ++i)
   {
     FusedObject& object = result.objects[i];

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include "grid_vision_fusion/fusion/tracker.h"
 
@@ -65,6 +67,40 @@ TrackObservation moving(const std::string& label, double x, double y, float u, d
   o.grid = movingCells(vx, vy);
   return o;
 }
+
+/// Grid cells projected into an image, as trackObjects() reads them: at (x, y) [m], all static,
+/// `since_hit` scans since the lidar last hit each.
+struct ProjectedCells
+{
+  std::vector<float> x, y;
+  std::vector<std::uint8_t> since_hit;
+
+  void add(double px, double py, std::uint8_t scans_since_hit = 0)
+  {
+    x.push_back(static_cast<float>(px));
+    y.push_back(static_cast<float>(py));
+    since_hit.push_back(scans_since_hit);
+  }
+  /// The view of the cells on a lattice of step `resolution` [m] (0: not given).
+  ProjectedPointsView view(double resolution)
+  {
+    zeros.assign(x.size(), 0.F);
+    states.assign(x.size(), static_cast<std::uint8_t>(CellState::kStatic));
+    ProjectedPointsView points;
+    points.size = x.size();
+    points.u = points.v = points.vx = points.vy = zeros.data();
+    points.x = x.data();
+    points.y = y.data();
+    points.state = states.data();
+    points.scans_since_hit = since_hit.data();
+    points.resolution = resolution;
+    return points;
+  }
+
+private:
+  std::vector<float> zeros;
+  std::vector<std::uint8_t> states;
+};
 }  // namespace
 
 TEST(Tracker, EveryObjectIsReportedFromItsFirstImageAndConfirmedAfterMinHits)
@@ -422,42 +458,27 @@ TEST(Tracker, TrackObjectsRegistersTheHitsOfTheGridsScan)
     double p_max = 0.0;
     for (int k = 0; k < 8; ++k)
     {
-      std::vector<float> x;
-      std::vector<float> y;
+      ProjectedCells cells;
       for (int j = 0; j < 9; ++j)  // the rear face
       {
-        x.push_back(10.1F);
-        y.push_back(2.1F + 0.2F * static_cast<float>(j));
+        cells.add(10.1, 2.1 + 0.2 * j);
       }
       for (int i = 1; i <= 2 + 3 * k; ++i)  // the side revealed so far
       {
-        x.push_back(10.1F + 0.2F * static_cast<float>(i));
-        y.push_back(2.1F);
+        cells.add(10.1 + 0.2 * i, 2.1);
       }
-      std::vector<std::uint8_t> since_hit(x.size(), 0);
       for (int i = 0; i < 25; ++i)  // the trail
       {
-        x.push_back(11.1F + 0.4F * static_cast<float>(k) + 0.2F * static_cast<float>(i % 5));
-        y.push_back(3.9F + 0.2F * static_cast<float>(i / 5));
-        since_hit.push_back(4);
+        cells.add(11.1 + 0.4 * k + 0.2 * (i % 5), 3.9 + 0.2 * (i / 5), 4);
       }
-      const std::vector<float> zeros(x.size(), 0.F);
-      const std::vector<std::uint8_t> states(x.size(), static_cast<std::uint8_t>(CellState::kStatic));
-      ProjectedPointsView points;
-      points.size = x.size();
-      points.u = points.v = points.vx = points.vy = zeros.data();
-      points.x = x.data();
-      points.y = y.data();
-      points.state = states.data();
-      points.scans_since_hit = since_hit.data();
-      points.resolution = resolution;
+      const ProjectedPointsView points = cells.view(resolution);
       FusionResult result;
       FusedObject object;
       object.detection_index = 0;
       object.x = 10.5 + 0.3 * k;
       object.y = 2.9;
       object.grid = standingCells();
-      for (std::uint32_t i = 0; i < x.size(); ++i)
+      for (std::uint32_t i = 0; i < points.size; ++i)
       {
         object.cluster.push_back(i);
       }
@@ -536,6 +557,112 @@ TEST(Tracker, TheHitsOfABoxCutByTheImageEdgeStillSayStandingAcrossItsLength)
   };
   EXPECT_GT(run(0.0), 0.5) << "without the registration, the drift reads as motion";
   EXPECT_LT(run(0.2), 0.5);
+}
+
+TEST(Tracker, ANewTrackRegistersItsFirstHitsAgainstTheScansBefore)
+{
+  // A car the detector misses for three images, then finds: the lidar hit its rear face and side
+  // in every scan, at 4 m/s along x (two cells per scan), beside a standing wall. The grid says
+  // nothing of it (no cells' evidence). Its first hits registered against those of the scans
+  // before say how it moved from its first image; without the scans before there is no
+  // evidence, and a standing car's hits say standing.
+  auto car = [](double x0)
+  {
+    std::vector<Eigen::Vector2d> hits;
+    for (int j = 0; j < 9; ++j)  // the rear face
+    {
+      hits.emplace_back(x0, 2.1 + 0.2 * j);
+    }
+    for (int i = 1; i <= 10; ++i)  // the side
+    {
+      hits.emplace_back(x0 + 0.2 * i, 2.1);
+    }
+    return hits;
+  };
+  auto first_image = [&](double speed, bool scans_before)
+  {
+    Tracker tracker;
+    for (int k = 0; k <= 3; ++k)
+    {
+      const double x0 = 10.1 + speed * kFramePeriodS * k;
+      std::vector<Eigen::Vector2d> scene = car(x0);
+      for (int i = 0; i < 60; ++i)  // the wall
+      {
+        scene.emplace_back(4.1 + 0.2 * i, -3.1);
+      }
+      std::vector<TrackObservation> observations;
+      if (k == 3)
+      {
+        TrackObservation o = observe("car", x0 + 2.0, 2.9, 600.F);
+        o.grid = GridMotionEvidence{};
+        o.hits = car(x0);
+        o.cell_size = 0.2;
+        observations.push_back(o);
+      }
+      const auto estimates = tracker.update(k * kFramePeriodS, observations,
+                                            scans_before ? scene : std::vector<Eigen::Vector2d>{});
+      if (k == 3)
+      {
+        return estimates.at(0).p_dynamic;
+      }
+    }
+    return -1.0;
+  };
+  EXPECT_GT(first_image(4.0, true), 0.8);
+  EXPECT_DOUBLE_EQ(first_image(4.0, false), 0.5) << "without the scans before, nothing is known";
+  EXPECT_LT(first_image(0.0, true), 0.2);
+}
+
+TEST(Tracker, TrackObjectsKeepsTheScenesHitsForNewTracks)
+{
+  // The grid's cells that the lidar hit in each image, objects or not, are the scans a new track
+  // registers its first hits against: a car hit at 4 m/s for three images before it is detected
+  // is dynamic in its first. Without those images' cells nothing is known.
+  auto first_image = [](bool cells_before)
+  {
+    Tracker tracker;
+    std::vector<Detection> detections(1);
+    detections[0].label = "car";
+    detections[0].box = BoundingBox{500.F, 150.F, 700.F, 250.F};
+    for (int k = 0; k <= 3; ++k)
+    {
+      ProjectedCells cells;
+      const double x0 = 10.1 + 0.4 * k;
+      if (cells_before || k == 3)
+      {
+        for (int j = 0; j < 9; ++j)  // the rear face
+        {
+          cells.add(x0, 2.1 + 0.2 * j);
+        }
+        for (int i = 1; i <= 10; ++i)  // the side
+        {
+          cells.add(x0 + 0.2 * i, 2.1);
+        }
+      }
+      const ProjectedPointsView points = cells.view(0.2);
+      FusionResult result;
+      if (k == 3)
+      {
+        FusedObject object;
+        object.x = x0 + 2.0;
+        object.y = 2.9;
+        object.grid = GridMotionEvidence{};
+        for (std::uint32_t i = 0; i < points.size; ++i)
+        {
+          object.cluster.push_back(i);
+        }
+        result.objects = {object};
+      }
+      trackObjects(tracker, k * kFramePeriodS, detections, 1242, points, result);
+      if (k == 3)
+      {
+        return result.objects.at(0).p_dynamic;
+      }
+    }
+    return -1.0;
+  };
+  EXPECT_GT(first_image(true), 0.8);
+  EXPECT_DOUBLE_EQ(first_image(false), 0.5);
 }
 
 TEST(Tracker, OnlyLabelsOfOneGroupAreAssociated)

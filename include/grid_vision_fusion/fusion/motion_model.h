@@ -132,6 +132,8 @@ public:
   Eigen::Matrix4d covariance() const;
   /// The constant-velocity model's velocity [m/s]: the object's velocity should it move.
   Eigen::Vector2d movingVelocity() const { return moving_.tail<2>(); }
+  /// ...and its covariance [m²/s²].
+  Eigen::Matrix2d movingVelocityCovariance() const { return moving_cov_.bottomRightCorner<2, 2>(); }
   /// Squared Mahalanobis distance of `position` from the combined predicted centre, with the
   /// measurement noise covariance `noise` [m²] (the tracker's association gate).
   double distance2(const Eigen::Vector2d& position, const Eigen::Matrix2d& noise) const;

@@ -79,8 +79,13 @@ private:
 double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vector2d& velocity,
                             const Eigen::Matrix2d& velocity_cov,
                             const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
-/// The same from the two scans' hits (ShiftVotes' arguments), counting the shifts within five
-/// standard deviations of either mode's displacement (and five cells).
+/// How far registrationLogRatio() looks for the displacement of hits `dt` [s] apart [m]: five
+/// standard deviations of either mode's displacement, and five cells (arguments as there).
+double registrationReach(double cell_size, double dt, const Eigen::Vector2d& velocity,
+                         const Eigen::Matrix2d& velocity_cov,
+                         const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
+/// The same from the two scans' hits (ShiftVotes' arguments), counting the shifts within
+/// registrationReach().
 double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
                             double cell_size, double dt, const Eigen::Vector2d& velocity,
                             const Eigen::Matrix2d& velocity_cov,

@@ -143,7 +143,12 @@ public:
   /// Processes the observations of the image at `stamp_s` [s]: one estimate per observation,
   /// in the same order. Stamps must increase; a stamp earlier than the last one, or later by
   /// more than max_gap, first drops every track (ids keep counting up).
-  std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations);
+  /// `scene_hits` are all the cells the lidar hit in the image's scan within the camera's view
+  /// [m], fixed frame, on the observations' lattice: an object is hit before it is detected (or
+  /// while its detections are missed), so a new track registers its first hits against those of
+  /// the scans before around them, from its first image, as a track does its own.
+  std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations,
+                                    std::vector<Eigen::Vector2d> scene_hits = {});
 
   /// For each detection of an image at `stamp_s` [s], what the track of its label group whose
   /// last box overlaps the detection's box most (by min_iou or more) expects of it: its cells
@@ -210,6 +215,9 @@ private:
   /// kRegistrationSpan, into the track's motion model; then the observation's hits join the
   /// track's.
   void registerHits(Track& track, const TrackObservation& observation) const;
+  /// The hits of the earlier scans (scene_hits_) that the new track's first observation may have
+  /// moved from: those within registrationReach() of its hits under its motion model `motion`.
+  std::deque<ObservedHits> hitsBefore(const TrackObservation& observation, const MotionModel& motion) const;
   /// A tentative track for an observation left over.
   Track newTrack(const TrackObservation& observation, double stamp_s);
   TrackEstimate estimateOf(const Track& track, double stamp_s) const;
@@ -226,6 +234,8 @@ private:
 
   TrackerConfig config_;
   std::vector<Track> tracks_;
+  /// The scene's hits of the last images, oldest first, within kRegistrationSpan of the latest.
+  std::deque<ObservedHits> scene_hits_;
   std::uint32_t next_id_ = 1;
   bool has_stamp_ = false;
   double last_stamp_ = 0.0;
