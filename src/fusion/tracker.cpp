@@ -410,9 +410,9 @@ std::deque<Tracker::ObservedHits> Tracker::hitsBefore(const TrackObservation& ob
                                                       const MotionModel& motion) const
 {
   std::deque<ObservedHits> before;
-  if (obs.hits.empty())
+  if (obs.hits.empty() || !(obs.cell_size > 0.0))
   {
-    return before;
+    return before;  // nothing to register
   }
   Eigen::Vector2d low = obs.hits.front();
   Eigen::Vector2d high = low;
