@@ -244,10 +244,10 @@ private:
 /// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
 /// observation (label and box of its detection, its centre, whether the box touches the left or
 /// right edge of an image `image_width` pixels wide, the grid's evidence of its cells, its
-/// cluster's cells in `points`); every
-/// object takes its track's id, state (tentative or confirmed), P(dynamic), verdict, filtered
-/// position and, when dynamic, velocity and heading (static and unknown ones zero, as the
-/// message says). Sets result.tracked.
+/// cluster's cells in `points`), and every cell of `points` the lidar hit in the grid's scan is
+/// a hit of the scene (Tracker::update()); every object takes its track's id, state (tentative
+/// or confirmed), P(dynamic), verdict, filtered position and, when dynamic, velocity and heading
+/// (static and unknown ones zero, as the message says). Sets result.tracked.
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
                   std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result);
 
