@@ -101,6 +101,31 @@ private:
   std::vector<float> zeros;
   std::vector<std::uint8_t> states;
 };
+
+/// The lidar's hits on a car [m] whose rear face (9 cells across y from y = 2.1) stands at x0,
+/// its side (10 cells along x) at y = 2.1: the cells of a 0.2 m grid.
+std::vector<Eigen::Vector2d> carHits(double x0)
+{
+  std::vector<Eigen::Vector2d> hits;
+  for (int j = 0; j < 9; ++j)  // the rear face
+  {
+    hits.emplace_back(x0, 2.1 + 0.2 * j);
+  }
+  for (int i = 1; i <= 10; ++i)  // the side
+  {
+    hits.emplace_back(x0 + 0.2 * i, 2.1);
+  }
+  return hits;
+}
+
+/// One detection of a car, its box at columns 500-700.
+std::vector<Detection> carDetection()
+{
+  std::vector<Detection> detections(1);
+  detections[0].label = "car";
+  detections[0].box = BoundingBox{500.F, 150.F, 700.F, 250.F};
+  return detections;
+}
 }  // namespace
 
 TEST(Tracker, EveryObjectIsReportedFromItsFirstImageAndConfirmedAfterMinHits)
@@ -452,9 +477,7 @@ TEST(Tracker, TrackObjectsRegistersTheHitsOfTheGridsScan)
   auto run = [](double resolution)
   {
     Tracker tracker;
-    std::vector<Detection> detections(1);
-    detections[0].label = "car";
-    detections[0].box = BoundingBox{500.F, 150.F, 700.F, 250.F};
+    const std::vector<Detection> detections = carDetection();
     double p_max = 0.0;
     for (int k = 0; k < 8; ++k)
     {
@@ -566,26 +589,13 @@ TEST(Tracker, ANewTrackRegistersItsFirstHitsAgainstTheScansBefore)
   // nothing of it (no cells' evidence). Its first hits registered against those of the scans
   // before say how it moved from its first image; without the scans before there is no
   // evidence, and a standing car's hits say standing.
-  auto car = [](double x0)
-  {
-    std::vector<Eigen::Vector2d> hits;
-    for (int j = 0; j < 9; ++j)  // the rear face
-    {
-      hits.emplace_back(x0, 2.1 + 0.2 * j);
-    }
-    for (int i = 1; i <= 10; ++i)  // the side
-    {
-      hits.emplace_back(x0 + 0.2 * i, 2.1);
-    }
-    return hits;
-  };
-  auto first_image = [&](double speed, bool scans_before)
+  auto first_image = [](double speed, bool scans_before)
   {
     Tracker tracker;
     for (int k = 0; k <= 3; ++k)
     {
       const double x0 = 10.1 + speed * kFramePeriodS * k;
-      std::vector<Eigen::Vector2d> scene = car(x0);
+      std::vector<Eigen::Vector2d> scene = carHits(x0);
       for (int i = 0; i < 60; ++i)  // the wall
       {
         scene.emplace_back(4.1 + 0.2 * i, -3.1);
@@ -595,7 +605,7 @@ TEST(Tracker, ANewTrackRegistersItsFirstHitsAgainstTheScansBefore)
       {
         TrackObservation o = observe("car", x0 + 2.0, 2.9, 600.F);
         o.grid = GridMotionEvidence{};
-        o.hits = car(x0);
+        o.hits = carHits(x0);
         o.cell_size = 0.2;
         observations.push_back(o);
       }
@@ -621,22 +631,16 @@ TEST(Tracker, TrackObjectsKeepsTheScenesHitsForNewTracks)
   auto first_image = [](bool cells_before)
   {
     Tracker tracker;
-    std::vector<Detection> detections(1);
-    detections[0].label = "car";
-    detections[0].box = BoundingBox{500.F, 150.F, 700.F, 250.F};
+    const std::vector<Detection> detections = carDetection();
     for (int k = 0; k <= 3; ++k)
     {
       ProjectedCells cells;
       const double x0 = 10.1 + 0.4 * k;
       if (cells_before || k == 3)
       {
-        for (int j = 0; j < 9; ++j)  // the rear face
+        for (const Eigen::Vector2d& hit : carHits(x0))
         {
-          cells.add(x0, 2.1 + 0.2 * j);
-        }
-        for (int i = 1; i <= 10; ++i)  // the side
-        {
-          cells.add(x0 + 0.2 * i, 2.1);
+          cells.add(hit.x(), hit.y());
         }
       }
       const ProjectedPointsView points = cells.view(0.2);
