@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -45,6 +46,18 @@ Eigen::Matrix2d cutNoise(const TrackObservation& observation)
   const Eigen::Vector2d length(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
   const double offset = 0.5 * observation.hidden_length;
   return offset * offset * length * length.transpose();
+}
+
+/// Drops from `hits` (oldest first, each with a `stamp` [s]) those older than the registration's
+/// span before `stamp_s` [s].
+template <typename Hits>
+void dropBeforeSpan(std::deque<Hits>& hits, double stamp_s)
+{
+  const double oldest = stamp_s - kRegistrationSpan - kRegistrationSlack;
+  while (!hits.empty() && hits.front().stamp < oldest)
+  {
+    hits.pop_front();
+  }
 }
 
 /// Whether the lidar hit the cell of point `i` in the grid's scan (every point, where the view does
@@ -268,6 +281,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   {
     track.motion.predict(dt);
   }
+  dropBeforeSpan(scene_hits_, stamp_s);  // before new tracks take their hits of the scans before
   const std::vector<std::size_t> match = associate(observations);
   std::vector<std::size_t> track_of(observations.size(), kUnassigned);
   for (std::size_t t = 0; t < tracks_.size(); ++t)
@@ -298,11 +312,6 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const Track& track) { return track.misses > config_.max_misses; }),
                 tracks_.end());
-  const double oldest = stamp_s - kRegistrationSpan - kRegistrationSlack;
-  while (!scene_hits_.empty() && scene_hits_.front().stamp < oldest)
-  {
-    scene_hits_.pop_front();
-  }
   scene_hits_.push_back({stamp_s, std::move(scene_hits)});
   return estimates;
 }
@@ -368,11 +377,7 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 
 void Tracker::registerHits(Track& track, const TrackObservation& obs) const
 {
-  const double oldest = last_stamp_ - kRegistrationSpan - kRegistrationSlack;
-  while (!track.recent_hits.empty() && track.recent_hits.front().stamp < oldest)
-  {
-    track.recent_hits.pop_front();
-  }
+  dropBeforeSpan(track.recent_hits, last_stamp_);
   if (!track.recent_hits.empty())
   {
     // A cut box's hits are those the image still shows: a window that slides along the object's
