@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -347,12 +348,18 @@ std::vector<GroundTruthObject> labelFolderGroundTruth(const std::string& label_d
   {
     const fs::path& path = entry.path();
     const std::string stem = path.stem().string();
-    if (path.extension() != ".txt" || stem.empty() || stem.size() > 9 ||
+    if (path.extension() != ".txt" || stem.empty() || stem.size() > 10 ||
         !std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c); }))
     {
       continue;
     }
-    files.emplace_back(std::stoi(stem), path.string());
+    const long long index = std::stoll(stem);
+    if (index > std::numeric_limits<int>::max())
+    {
+      throw std::runtime_error(path.string() + ": frame index beyond " +
+                               std::to_string(std::numeric_limits<int>::max()));
+    }
+    files.emplace_back(static_cast<int>(index), path.string());
   }
   if (files.empty())
   {

@@ -407,6 +407,21 @@ TEST(MotionLabels, FolderGroundTruth)
       std::string::npos);
 }
 
+TEST(MotionLabels, FolderOfTenDigitNames)
+{
+  // The raw layout's names (0000000012.txt, as label_2 of an assembled drive) are frame indices
+  // too; a longer run of digits is no frame name.
+  const std::string dir = tempDir("ten_digits");
+  std::ofstream(dir + "/0000000012.txt")
+      << "Car 0.00 0 0 100 150 200 220 1.5 1.6 3.9 0.0 1.65 20.0 0 static\n";
+  std::ofstream(dir + "/12345678901.txt") << "not a label file\n";
+  const std::vector<GroundTruthObject> gt =
+      labelFolderGroundTruth(dir, drive().calibration, KittiGroundTruthConfig{});
+  ASSERT_EQ(gt.size(), 1U);
+  EXPECT_EQ(gt[0].frame_index, 12);
+  EXPECT_EQ(gt[0].object.frame, "0000000012");
+}
+
 TEST(KittiFrameName, TenDigits)
 {
   EXPECT_EQ(kittiFrameName(42), "0000000042");
