@@ -18,13 +18,8 @@ namespace
 /// A detection's match against the ground truth of its class.
 struct Match
 {
-  enum Kind
-  {
-    kTruePositive,
-    kFalsePositive,
-    kIgnored,
-  } kind = kFalsePositive;
-  std::size_t truth = 0;  ///< index into the ground-truth list when kTruePositive
+  DetectionOutcome kind = DetectionOutcome::kFalsePositive;
+  std::size_t truth = 0;  ///< index into the ground-truth list when a true positive
 };
 
 double wrapAngle(double angle)
@@ -37,14 +32,47 @@ double wrapAngle(double angle)
   return angle - M_PI;
 }
 
+bool inRange(const EvalObject& object, double max_longitudinal_m)
+{
+  return object.longitudinal_m <= max_longitudinal_m;
+}
+
+/// The DontCare regions of each frame.
+using DontCareRegions = std::map<std::string, std::vector<BoundingBox>>;
+
+/// Whether `box` lies in a DontCare region of `frame`: intersection / area of `box` >= `overlap`
+/// ("+1 pixel" convention), as the KITTI devkit's boxoverlap(det, dontcare, "a").
+bool inDontCare(const DontCareRegions& regions, const std::string& frame, const BoundingBox& box,
+                double overlap)
+{
+  const auto found = regions.find(frame);
+  if (found == regions.end())
+  {
+    return false;
+  }
+  const double area = (box.x_max - box.x_min + 1.0) * (box.y_max - box.y_min + 1.0);
+  for (const BoundingBox& region : found->second)
+  {
+    const double iw = std::min(box.x_max, region.x_max) - std::max(box.x_min, region.x_min) + 1.0;
+    const double ih = std::min(box.y_max, region.y_max) - std::max(box.y_min, region.y_min) + 1.0;
+    if (iw > 0.0 && ih > 0.0 && area > 0.0 && iw * ih / area >= overlap)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 /// Cartucho/mAP greedy matching of the detections `det_indices` (any order) against the
-/// ground truth `gt_indices`, both already restricted to one class. Returns one Match per
-/// detection, in descending score order (stable), together with that order.
+/// ground truth `gt_indices`, both already restricted to one class, with the range limit and
+/// the DontCare regions of the file comment. Returns one Match per detection, in descending
+/// score order (stable), together with that order.
 std::vector<std::pair<std::size_t, Match>> greedyMatch(const std::vector<EvalObject>& ground_truth,
                                                        const std::vector<std::size_t>& gt_indices,
                                                        const std::vector<EvalObject>& detections,
                                                        std::vector<std::size_t> det_indices,
-                                                       double iou_threshold)
+                                                       const EvaluationConfig& config,
+                                                       const DontCareRegions& dont_care)
 {
   std::stable_sort(det_indices.begin(), det_indices.end(),
                    [&](std::size_t a, std::size_t b) { return detections[a].score > detections[b].score; });
@@ -74,27 +102,103 @@ std::vector<std::pair<std::size_t, Match>> greedyMatch(const std::vector<EvalObj
       }
     }
     Match match;
-    if (best_iou >= iou_threshold)
+    if (best_iou >= config.iou_threshold)
     {
-      if (ground_truth[best].difficult)
+      if (!inRange(ground_truth[best], config.max_longitudinal_m))
       {
-        match.kind = Match::kIgnored;
+        match.kind = DetectionOutcome::kIgnoredBeyondRange;
+      }
+      else if (ground_truth[best].difficult)
+      {
+        match.kind = DetectionOutcome::kIgnoredDifficult;
       }
       else if (!used[best])
       {
         used[best] = true;
-        match.kind = Match::kTruePositive;
+        match.kind = DetectionOutcome::kTruePositive;
         match.truth = best;
       }
+    }
+    if (match.kind != DetectionOutcome::kTruePositive && !inRange(detections[d], config.max_longitudinal_m))
+    {
+      match.kind = DetectionOutcome::kLeftOutBeyondRange;
+    }
+    else if (match.kind == DetectionOutcome::kFalsePositive &&
+             inDontCare(dont_care, detections[d].frame, detections[d].box, config.iou_threshold))
+    {
+      match.kind = DetectionOutcome::kIgnoredDontCare;
     }
     matches.emplace_back(d, match);
   }
   return matches;
 }
 
-bool inRange(const EvalObject& object, const EvaluationConfig& config)
+/// The ground truth and detections of every evaluation class, and the DontCare regions.
+struct ClassLists
 {
-  return object.longitudinal_m <= config.max_longitudinal_m;
+  std::map<std::string, std::vector<std::size_t>> gt_of, det_of;
+  std::set<std::string> gt_classes;  ///< classes with counted (non-difficult, in range) ground truth
+  DontCareRegions dont_care;
+};
+
+ClassLists classLists(const std::vector<EvalObject>& ground_truth, const std::vector<EvalObject>& detections,
+                      const EvaluationConfig& config)
+{
+  ClassLists lists;
+  for (std::size_t g = 0; g < ground_truth.size(); ++g)
+  {
+    const EvalObject& o = ground_truth[g];
+    if (o.dont_care)
+    {
+      lists.dont_care[o.frame].push_back(o.box);
+      continue;
+    }
+    for (const std::string& name : truthClasses(o, config))
+    {
+      lists.gt_of[name].push_back(g);
+    }
+    if (!ignoredTruth(o, config))
+    {
+      lists.gt_classes.insert(evaluationClass(o.label, o.motion, config.motion_classes));
+    }
+  }
+  for (std::size_t d = 0; d < detections.size(); ++d)
+  {
+    lists.det_of[evaluationClass(detections[d].label, detections[d].motion, config.motion_classes)].push_back(
+        d);
+  }
+  return lists;
+}
+
+/// Counts `match` into the figures of its class (the PR curve point of a counted detection).
+void countMatch(const Match& match, ClassMetrics& metrics)
+{
+  switch (match.kind)
+  {
+    case DetectionOutcome::kIgnoredDifficult:
+      ++metrics.ignored_difficult;
+      return;
+    case DetectionOutcome::kIgnoredBeyondRange:
+      ++metrics.ignored_beyond_range;
+      return;
+    case DetectionOutcome::kIgnoredDontCare:
+      ++metrics.ignored_dont_care;
+      return;
+    case DetectionOutcome::kLeftOutBeyondRange:
+      ++metrics.left_out_beyond_range;
+      return;
+    case DetectionOutcome::kTruePositive:
+      ++metrics.true_positives;
+      break;
+    case DetectionOutcome::kFalsePositive:
+      ++metrics.false_positives;
+      break;
+  }
+  ++metrics.detections;
+  const double tp = static_cast<double>(metrics.true_positives);
+  metrics.recall_curve.push_back(metrics.ground_truth > 0 ? tp / static_cast<double>(metrics.ground_truth)
+                                                          : 0.0);
+  metrics.precision_curve.push_back(tp / static_cast<double>(metrics.detections));
 }
 }  // namespace
 
@@ -254,111 +358,100 @@ ErrorStats errorStats(std::vector<double> values)
   return stats;
 }
 
-EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
-                          const std::vector<EvalObject>& detections, const EvaluationConfig& config)
+namespace
 {
-  config.validate();
-  EvaluationResult result;
+/// Precision, recall, F1 and AP of one class from its counted matches.
+ClassMetrics classMetrics(const std::string& name, const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const ClassLists& lists,
+                          const EvaluationConfig& config)
+{
+  ClassMetrics metrics;
+  metrics.name = name;
+  static const std::vector<std::size_t> kNone;
+  const auto gts = lists.gt_of.find(name);
+  const auto dets = lists.det_of.find(name);
+  const std::vector<std::size_t>& gt_indices = gts == lists.gt_of.end() ? kNone : gts->second;
+  metrics.ground_truth = static_cast<std::size_t>(
+      std::count_if(gt_indices.begin(), gt_indices.end(),
+                    [&](std::size_t g) { return !ignoredTruth(ground_truth[g], config); }));
+  for (const auto& [d, match] :
+       greedyMatch(ground_truth, gt_indices, detections, dets == lists.det_of.end() ? kNone : dets->second,
+                   config, lists.dont_care))
+  {
+    (void)d;
+    countMatch(match, metrics);
+  }
+  if (metrics.detections > 0)
+  {
+    metrics.precision = static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.detections);
+  }
+  if (metrics.ground_truth > 0)
+  {
+    metrics.recall = static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.ground_truth);
+    metrics.average_precision = vocAveragePrecision(metrics.recall_curve, metrics.precision_curve);
+  }
+  if (metrics.precision + metrics.recall > 0.0)
+  {
+    metrics.f1 = 2.0 * metrics.precision * metrics.recall / (metrics.precision + metrics.recall);
+  }
+  return metrics;
+}
 
-  // Per evaluation class: the in-range ground truth and detections.
-  std::map<std::string, std::vector<std::size_t>> gt_of, det_of;
-  std::set<std::string> gt_classes;
+/// One true positive of the class-only matching into the motion and state figures of `result`.
+void addMatchedObject(const EvalObject& gt, const EvalObject& det, const std::string& label,
+                      EvaluationResult& result, std::vector<double>& position_errors,
+                      std::vector<double>& speed_errors, std::vector<double>& heading_errors)
+{
+  const auto truth_index = static_cast<std::size_t>(gt.motion);
+  const auto predicted_index = static_cast<std::size_t>(det.motion);
+  ++result.motion_confusion[truth_index][predicted_index];
+  ++result.motion_confusion_by_class[label][truth_index][predicted_index];
+  MatchedObject matched;
+  matched.frame = gt.frame;
+  matched.label = label;
+  matched.truth_motion = gt.motion;
+  matched.predicted_motion = det.motion;
+  matched.truth_speed_mps = gt.has_state ? std::hypot(gt.vx, gt.vy) : 0.0;
+  matched.band = speedBandOf(gt.motion, gt.has_state, matched.truth_speed_mps);
+  matched.longitudinal_m = gt.longitudinal_m;
+  matched.truth_id = gt.track_id;
+  matched.track_id = det.track_id;
+  matched.p_dynamic = det.p_dynamic;
+  matched.has_state = det.has_state && gt.has_state;
+  matched.position_error_m = std::nan("");
+  matched.speed_error_mps = std::nan("");
+  matched.heading_error_rad = std::nan("");
+  ++result.motion_by_class_and_band[label][matched.band][predicted_index];
+  if (matched.has_state)
+  {
+    matched.position_error_m = std::hypot(det.x - gt.x, det.y - gt.y);
+    matched.speed_error_mps = std::abs(std::hypot(det.vx, det.vy) - matched.truth_speed_mps);
+    position_errors.push_back(matched.position_error_m);
+    speed_errors.push_back(matched.speed_error_mps);
+    if (det.motion == Motion::kDynamic && gt.motion == Motion::kDynamic)
+    {
+      matched.heading_error_rad = std::abs(wrapAngle(std::atan2(det.vy, det.vx) - std::atan2(gt.vy, gt.vx)));
+      heading_errors.push_back(matched.heading_error_rad);
+    }
+  }
+  result.matched_objects.push_back(std::move(matched));
+}
+
+/// Motion and state errors: the ground truth and detections matched by object class alone,
+/// whatever the motion (the same rules, true positives only).
+void addMotionAndStateFigures(const std::vector<EvalObject>& ground_truth,
+                              const std::vector<EvalObject>& detections, const ClassLists& lists,
+                              const EvaluationConfig& config, EvaluationResult& result)
+{
+  std::map<std::string, std::vector<std::size_t>> gt_by_label, det_by_label;
   for (std::size_t g = 0; g < ground_truth.size(); ++g)
   {
-    if (!inRange(ground_truth[g], config))
-    {
-      continue;
-    }
-    const std::string name =
-        evaluationClass(ground_truth[g].label, ground_truth[g].motion, config.motion_classes);
-    gt_of[name].push_back(g);
-    if (!ground_truth[g].difficult)
-    {
-      gt_classes.insert(name);
-    }
-  }
-  for (std::size_t d = 0; d < detections.size(); ++d)
-  {
-    if (inRange(detections[d], config))
-    {
-      det_of[evaluationClass(detections[d].label, detections[d].motion, config.motion_classes)].push_back(d);
-    }
-  }
-  std::set<std::string> names(gt_classes);
-  for (const auto& entry : det_of)
-  {
-    names.insert(entry.first);
-  }
-
-  double ap_sum = 0.0;
-  for (const std::string& name : names)
-  {
-    ClassMetrics metrics;
-    metrics.name = name;
-    const std::vector<std::size_t>& gts = gt_of[name];
-    metrics.ground_truth = static_cast<std::size_t>(
-        std::count_if(gts.begin(), gts.end(), [&](std::size_t g) { return !ground_truth[g].difficult; }));
-    for (const auto& [d, match] :
-         greedyMatch(ground_truth, gts, detections, det_of[name], config.iou_threshold))
-    {
-      (void)d;
-      if (match.kind == Match::kIgnored)
-      {
-        continue;
-      }
-      ++metrics.detections;
-      if (match.kind == Match::kTruePositive)
-      {
-        ++metrics.true_positives;
-      }
-      else
-      {
-        ++metrics.false_positives;
-      }
-      const double tp = static_cast<double>(metrics.true_positives);
-      metrics.recall_curve.push_back(metrics.ground_truth > 0 ? tp / static_cast<double>(metrics.ground_truth)
-                                                              : 0.0);
-      metrics.precision_curve.push_back(tp / static_cast<double>(metrics.detections));
-    }
-    if (metrics.detections > 0)
-    {
-      metrics.precision =
-          static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.detections);
-    }
-    if (metrics.ground_truth > 0)
-    {
-      metrics.recall =
-          static_cast<double>(metrics.true_positives) / static_cast<double>(metrics.ground_truth);
-      metrics.average_precision = vocAveragePrecision(metrics.recall_curve, metrics.precision_curve);
-    }
-    if (metrics.precision + metrics.recall > 0.0)
-    {
-      metrics.f1 = 2.0 * metrics.precision * metrics.recall / (metrics.precision + metrics.recall);
-    }
-    if (gt_classes.count(name) > 0)
-    {
-      ap_sum += metrics.average_precision;
-    }
-    result.classes.push_back(std::move(metrics));
-  }
-  std::stable_partition(result.classes.begin(), result.classes.end(),
-                        [&](const ClassMetrics& m) { return gt_classes.count(m.name) > 0; });
-  if (!gt_classes.empty())
-  {
-    result.mean_average_precision = ap_sum / static_cast<double>(gt_classes.size());
-  }
-
-  // Motion and state errors: match by object class alone, whatever the motion.
-  std::map<std::string, std::vector<std::size_t>> gt_by_label, det_by_label;
-  for (const auto& [name, indices] : gt_of)
-  {
-    (void)name;
-    for (std::size_t g : indices)
+    if (!ground_truth[g].dont_care)
     {
       gt_by_label[ground_truth[g].label].push_back(g);
     }
   }
-  for (const auto& [name, indices] : det_of)
+  for (const auto& [name, indices] : lists.det_of)
   {
     (void)name;
     for (std::size_t d : indices)
@@ -370,53 +463,116 @@ EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
   for (const auto& [label, dets] : det_by_label)
   {
     for (const auto& [d, match] :
-         greedyMatch(ground_truth, gt_by_label[label], detections, dets, config.iou_threshold))
+         greedyMatch(ground_truth, gt_by_label[label], detections, dets, config, lists.dont_care))
     {
-      if (match.kind != Match::kTruePositive)
+      if (match.kind == DetectionOutcome::kTruePositive)
       {
-        continue;
+        addMatchedObject(ground_truth[match.truth], detections[d], label, result, position_errors,
+                         speed_errors, heading_errors);
       }
-      const EvalObject& det = detections[d];
-      const EvalObject& gt = ground_truth[match.truth];
-      const auto truth_index = static_cast<std::size_t>(gt.motion);
-      const auto predicted_index = static_cast<std::size_t>(det.motion);
-      ++result.motion_confusion[truth_index][predicted_index];
-      ++result.motion_confusion_by_class[label][truth_index][predicted_index];
-      MatchedObject matched;
-      matched.frame = gt.frame;
-      matched.label = label;
-      matched.truth_motion = gt.motion;
-      matched.predicted_motion = det.motion;
-      matched.truth_speed_mps = gt.has_state ? std::hypot(gt.vx, gt.vy) : 0.0;
-      matched.band = speedBandOf(gt.motion, gt.has_state, matched.truth_speed_mps);
-      matched.longitudinal_m = gt.longitudinal_m;
-      matched.truth_id = gt.track_id;
-      matched.track_id = det.track_id;
-      matched.p_dynamic = det.p_dynamic;
-      matched.has_state = det.has_state && gt.has_state;
-      matched.position_error_m = std::nan("");
-      matched.speed_error_mps = std::nan("");
-      matched.heading_error_rad = std::nan("");
-      ++result.motion_by_class_and_band[label][matched.band][predicted_index];
-      if (matched.has_state)
-      {
-        matched.position_error_m = std::hypot(det.x - gt.x, det.y - gt.y);
-        matched.speed_error_mps = std::abs(std::hypot(det.vx, det.vy) - matched.truth_speed_mps);
-        position_errors.push_back(matched.position_error_m);
-        speed_errors.push_back(matched.speed_error_mps);
-        if (det.motion == Motion::kDynamic && gt.motion == Motion::kDynamic)
-        {
-          matched.heading_error_rad =
-              std::abs(wrapAngle(std::atan2(det.vy, det.vx) - std::atan2(gt.vy, gt.vx)));
-          heading_errors.push_back(matched.heading_error_rad);
-        }
-      }
-      result.matched_objects.push_back(std::move(matched));
     }
   }
   result.position_error_m = errorStats(std::move(position_errors));
   result.speed_error_mps = errorStats(std::move(speed_errors));
   result.heading_error_rad = errorStats(std::move(heading_errors));
+}
+}  // namespace
+
+bool ignoredTruth(const EvalObject& truth, const EvaluationConfig& config)
+{
+  return truth.difficult || !inRange(truth, config.max_longitudinal_m);
+}
+
+std::vector<std::string> truthClasses(const EvalObject& truth, const EvaluationConfig& config)
+{
+  std::vector<std::string> names{evaluationClass(truth.label, truth.motion, config.motion_classes)};
+  if (config.motion_classes && ignoredTruth(truth, config))
+  {
+    for (const Motion motion : {Motion::kUnknown, Motion::kStatic, Motion::kDynamic})
+    {
+      if (motion != truth.motion)
+      {
+        names.push_back(evaluationClass(truth.label, motion, true));
+      }
+    }
+  }
+  return names;
+}
+
+std::string toString(DetectionOutcome outcome)
+{
+  switch (outcome)
+  {
+    case DetectionOutcome::kTruePositive:
+      return "true_positive";
+    case DetectionOutcome::kFalsePositive:
+      return "false_positive";
+    case DetectionOutcome::kIgnoredDifficult:
+      return "ignored_difficult";
+    case DetectionOutcome::kIgnoredBeyondRange:
+      return "ignored_beyond_range";
+    case DetectionOutcome::kIgnoredDontCare:
+      return "ignored_dont_care";
+    case DetectionOutcome::kLeftOutBeyondRange:
+      break;
+  }
+  return "left_out_beyond_range";
+}
+
+std::vector<DetectionOutcome> detectionOutcomes(const std::vector<EvalObject>& ground_truth,
+                                                const std::vector<EvalObject>& detections,
+                                                const EvaluationConfig& config)
+{
+  config.validate();
+  const ClassLists lists = classLists(ground_truth, detections, config);
+  std::vector<DetectionOutcome> outcomes(detections.size(), DetectionOutcome::kFalsePositive);
+  static const std::vector<std::size_t> kNone;
+  for (const auto& [name, dets] : lists.det_of)
+  {
+    const auto gts = lists.gt_of.find(name);
+    for (const auto& [d, match] : greedyMatch(ground_truth, gts == lists.gt_of.end() ? kNone : gts->second,
+                                              detections, dets, config, lists.dont_care))
+    {
+      outcomes[d] = match.kind;
+    }
+  }
+  return outcomes;
+}
+
+EvaluationResult evaluate(const std::vector<EvalObject>& ground_truth,
+                          const std::vector<EvalObject>& detections, const EvaluationConfig& config)
+{
+  config.validate();
+  EvaluationResult result;
+  const ClassLists lists = classLists(ground_truth, detections, config);
+  std::set<std::string> names(lists.gt_classes);
+  for (const auto& entry : lists.det_of)
+  {
+    names.insert(entry.first);
+  }
+  double ap_sum = 0.0;
+  for (const std::string& name : names)
+  {
+    ClassMetrics metrics = classMetrics(name, ground_truth, detections, lists, config);
+    const auto dets = lists.det_of.find(name);
+    if (lists.gt_classes.count(name) == 0 && dets != lists.det_of.end() &&
+        metrics.left_out_beyond_range == dets->second.size())
+    {
+      continue;  // only detections beyond the range limit that match nothing: not a class here
+    }
+    if (lists.gt_classes.count(name) > 0)
+    {
+      ap_sum += metrics.average_precision;
+    }
+    result.classes.push_back(std::move(metrics));
+  }
+  std::stable_partition(result.classes.begin(), result.classes.end(),
+                        [&](const ClassMetrics& m) { return lists.gt_classes.count(m.name) > 0; });
+  if (!lists.gt_classes.empty())
+  {
+    result.mean_average_precision = ap_sum / static_cast<double>(lists.gt_classes.size());
+  }
+  addMotionAndStateFigures(ground_truth, detections, lists, config, result);
   result.p_dynamic_calibration = probabilityCalibration(result.matched_objects);
   return result;
 }
@@ -527,24 +683,25 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
 {
   config.validate();
   TrackingMetrics m;
-  // Frame -> objects in range, frames in name order (10-digit indices: time order).
+  // Frame -> objects (ground truth beyond the range limit is ignored below, as difficult) and
+  // DontCare regions, frames in name order (10-digit indices: time order).
   std::map<std::string, std::vector<std::size_t>> gt_of, det_of;
   std::vector<std::size_t> gt_all, det_all;
+  DontCareRegions dont_care;
   for (std::size_t g = 0; g < ground_truth.size(); ++g)
   {
-    if (ground_truth[g].longitudinal_m <= config.max_longitudinal_m)
+    if (ground_truth[g].dont_care)
     {
-      gt_of[ground_truth[g].frame].push_back(g);
-      gt_all.push_back(g);
+      dont_care[ground_truth[g].frame].push_back(ground_truth[g].box);
+      continue;
     }
+    gt_of[ground_truth[g].frame].push_back(g);
+    gt_all.push_back(g);
   }
   for (std::size_t d = 0; d < detections.size(); ++d)
   {
-    if (detections[d].longitudinal_m <= config.max_longitudinal_m)
-    {
-      det_of[detections[d].frame].push_back(d);
-      det_all.push_back(d);
-    }
+    det_of[detections[d].frame].push_back(d);
+    det_all.push_back(d);
   }
   const std::vector<std::int64_t> gt_id = identities(ground_truth, gt_all);
   const std::vector<std::int64_t> det_id = identities(detections, det_all);
@@ -568,10 +725,11 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
   };
   for (const std::string& frame : frames)
   {
-    std::vector<std::size_t> truth, difficult;
+    std::vector<std::size_t> truth, difficult;  // counted, ignored (difficult or beyond the range)
     for (std::size_t g : gt_of[frame])
     {
-      (ground_truth[g].difficult ? difficult : truth).push_back(g);
+      const bool ignored = ground_truth[g].difficult || !inRange(ground_truth[g], config.max_longitudinal_m);
+      (ignored ? difficult : truth).push_back(g);
     }
     const std::vector<std::size_t>& dets = det_of[frame];
     std::vector<std::size_t> det_match(dets.size(), kUnassigned);  // index into truth
@@ -634,7 +792,8 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
       }
     }
 
-    // Detections that match only difficult ground truth are ignored.
+    // Unmatched detections that match ignored ground truth, lie beyond the range limit or in a
+    // DontCare region are ignored.
     std::vector<bool> ignored(dets.size(), false);
     for (std::size_t j = 0; j < dets.size(); ++j)
     {
@@ -642,14 +801,11 @@ TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
       {
         continue;
       }
-      for (std::size_t g : difficult)
-      {
-        if (qualifies(g, dets[j]))
-        {
-          ignored[j] = true;
-          break;
-        }
-      }
+      const EvalObject& det = detections[dets[j]];
+      ignored[j] = !inRange(det, config.max_longitudinal_m) ||
+                   std::any_of(difficult.begin(), difficult.end(),
+                               [&](std::size_t g) { return qualifies(g, dets[j]); }) ||
+                   inDontCare(dont_care, frame, det.box, config.iou_threshold);
       if (!ignored[j])
       {
         ++m.false_positives;

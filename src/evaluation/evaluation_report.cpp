@@ -260,6 +260,28 @@ void calibrationMarkdown(std::ostream& out, const ProbabilityCalibration& c)
   }
 }
 
+/// The detections that are neither true nor false positives, summed over the classes (nothing
+/// when there is none).
+void notCountedMarkdown(std::ostream& out, const EvaluationResult& result, const EvaluationConfig& config)
+{
+  std::size_t difficult = 0, beyond = 0, dont_care = 0, left_out = 0;
+  for (const ClassMetrics& m : result.classes)
+  {
+    difficult += m.ignored_difficult;
+    beyond += m.ignored_beyond_range;
+    dont_care += m.ignored_dont_care;
+    left_out += m.left_out_beyond_range;
+  }
+  if (difficult + beyond + dont_care + left_out == 0)
+  {
+    return;
+  }
+  const std::string range = number(config.max_longitudinal_m, 1) + " m";
+  out << "\nNot counted: " << difficult << " detections matching difficult ground truth, " << beyond
+      << " matching ground truth beyond " << range << ", " << dont_care << " in DontCare regions; "
+      << left_out << " beyond " << range << " matching nothing.\n";
+}
+
 }  // namespace
 
 std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config)
@@ -277,6 +299,10 @@ std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& 
         << ", \"true_positives\": " << m.true_positives << ", \"false_positives\": " << m.false_positives
         << ", \"precision\": " << number(m.precision) << ", \"recall\": " << number(m.recall)
         << ", \"f1\": " << number(m.f1) << ", \"ap\": " << number(m.average_precision)
+        << ",\n     \"ignored_difficult\": " << m.ignored_difficult
+        << ", \"ignored_beyond_range\": " << m.ignored_beyond_range
+        << ", \"ignored_dont_care\": " << m.ignored_dont_care
+        << ", \"left_out_beyond_range\": " << m.left_out_beyond_range
         << ",\n     \"recall_curve\": " << jsonArray(m.recall_curve)
         << ",\n     \"precision_curve\": " << jsonArray(m.precision_curve) << "}";
   }
@@ -336,7 +362,9 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
 {
   std::ostringstream out;
   out << "# Evaluation report\n\nObjects up to " << number(config.max_longitudinal_m, 1)
-      << " m ahead; a true positive needs IoU >= " << number(config.iou_threshold, 2)
+      << " m ahead (ground truth farther ahead is ignored like difficult ground truth; a detection "
+         "farther ahead counts only as a true positive); a true positive needs IoU >= "
+      << number(config.iou_threshold, 2)
       << " (+1 pixel convention) with a ground-truth box of the same class.\n\n";
   out << "## Table I — precision, recall and F1 per class [%]\n\n"
       << "| Class | Precision | Recall | F1-score | GT | TP | FP |\n|---|---|---|---|---|---|---|\n";
@@ -346,6 +374,7 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
         << percent(m.f1) << " | " << m.ground_truth << " | " << m.true_positives << " | " << m.false_positives
         << " |\n";
   }
+  notCountedMarkdown(out, result, config);
   out << "\n## Table II — average precision (VOC2012 all-point) [%]\n\n| Class | AP |\n|---|---|\n";
   for (const auto& m : result.classes)
   {
@@ -434,17 +463,22 @@ void writeCartuchoFolders(const std::string& dir, const std::vector<EvalObject>&
   {
     std::string& lines = gt_lines[o.frame];
     det_lines[o.frame];
-    if (o.longitudinal_m <= config.max_longitudinal_m)
+    if (o.dont_care)
     {
-      lines += evaluationClass(o.label, o.motion, config.motion_classes) + " " + box(o.box) +
-               (o.difficult ? " difficult" : "") + "\n";
+      continue;
+    }
+    for (const std::string& name : truthClasses(o, config))  // an ignored one in each motion's class
+    {
+      lines += name + " " + box(o.box) + (ignoredTruth(o, config) ? " difficult" : "") + "\n";
     }
   }
-  for (const auto& o : detections)
+  const std::vector<DetectionOutcome> outcomes = detectionOutcomes(ground_truth, detections, config);
+  for (std::size_t d = 0; d < detections.size(); ++d)
   {
+    const EvalObject& o = detections[d];
     std::string& lines = det_lines[o.frame];
     gt_lines[o.frame];
-    if (o.longitudinal_m <= config.max_longitudinal_m)
+    if (outcomes[d] == DetectionOutcome::kTruePositive || outcomes[d] == DetectionOutcome::kFalsePositive)
     {
       lines += evaluationClass(o.label, o.motion, config.motion_classes) + " " + number(o.score) + " " +
                box(o.box) + "\n";

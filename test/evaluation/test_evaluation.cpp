@@ -155,19 +155,133 @@ TEST(Evaluation, ClassWithoutDetectionsCountsZeroInTheMap)
   EXPECT_EQ(r.classes.back().name, "staticTruck");  // GT classes listed first
 }
 
-TEST(Evaluation, RangeFilterDropsFarObjects)
+TEST(Evaluation, RangeLimitIgnoresFarTruthAndLeavesOutFarFalsePositives)
 {
-  EvalObject far_gt = object("a", "car", Motion::kStatic, kFar);
-  far_gt.longitudinal_m = 35.0;
-  EvalObject far_det = object("a", "car", Motion::kStatic, kA, 0.9F);
-  far_det.longitudinal_m = 30.5;
-  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), far_gt};
-  const ClassMetrics car = evaluate(gt, {far_det}, perClass()).classes.at(0);
+  // Truth: g1 at 10 m (kA), g2 at 31 m (kFar), beyond the 30 m limit. Detections, by score:
+  // d1 inside (29.5 m) on g2: ignored (before: a false positive); d2 beyond (30.5 m) on g1: a
+  // true positive (before: left out, g1 missed); d3 beyond (31 m) matching nothing: left out;
+  // d4 inside matching nothing: a false positive. g2 is never a miss.
+  EvalObject g2 = object("a", "car", Motion::kStatic, kFar);
+  g2.longitudinal_m = 31.0;
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), g2};
+  auto at = [](EvalObject o, double longitudinal_m)
+  {
+    o.longitudinal_m = longitudinal_m;
+    return o;
+  };
+  const BoundingBox kNowhere{50.F, 50.F, 59.F, 59.F};
+  const std::vector<EvalObject> det{at(object("a", "car", Motion::kStatic, kFar, 0.9F), 29.5),
+                                    at(object("a", "car", Motion::kStatic, kA, 0.8F), 30.5),
+                                    at(object("a", "car", Motion::kStatic, kNowhere, 0.7F), 31.0),
+                                    at(object("a", "car", Motion::kStatic, kNowhere, 0.6F), 20.0)};
+  const EvaluationResult r = evaluate(gt, det, perClass());
+  ASSERT_EQ(r.classes.size(), 1U);
+  const ClassMetrics& car = r.classes[0];
   EXPECT_EQ(car.ground_truth, 1U);
-  EXPECT_EQ(car.detections, 0U);
+  EXPECT_EQ(car.detections, 2U);
+  EXPECT_EQ(car.true_positives, 1U);
+  EXPECT_EQ(car.false_positives, 1U);
+  EXPECT_EQ(car.ignored_beyond_range, 1U);
+  EXPECT_EQ(car.left_out_beyond_range, 1U);
+  EXPECT_EQ(car.ignored_difficult, 0U);
+  EXPECT_DOUBLE_EQ(car.recall, 1.0);
+  EXPECT_DOUBLE_EQ(car.average_precision, 1.0);  // d2 TP (rec 1, prec 1), then d4 FP
+  EXPECT_EQ(detectionOutcomes(gt, det, perClass()),
+            (std::vector<DetectionOutcome>{
+                DetectionOutcome::kIgnoredBeyondRange, DetectionOutcome::kTruePositive,
+                DetectionOutcome::kLeftOutBeyondRange, DetectionOutcome::kFalsePositive}));
+  // The motion figures take the true positive whose detection lies beyond the limit.
+  ASSERT_EQ(r.matched_objects.size(), 1U);
+  EXPECT_EQ(r.motion_confusion[1][1], 1U);
+  EXPECT_DOUBLE_EQ(r.matched_objects[0].longitudinal_m, 10.0);
+
+  // A detection inside the limit whose truth lies at 31 m alone: ignored, no false positive; the
+  // class has no counted truth (not in the mAP).
+  const EvaluationResult only_far = evaluate({g2}, {det[0]}, perClass());
+  ASSERT_EQ(only_far.classes.size(), 1U);
+  EXPECT_EQ(only_far.classes[0].false_positives, 0U);
+  EXPECT_EQ(only_far.classes[0].ignored_beyond_range, 1U);
+  EXPECT_EQ(only_far.classes[0].ground_truth, 0U);
+  // Far detections matching nothing, alone: no class at all (as they were left out before).
+  EXPECT_TRUE(evaluate({}, {det[2]}, perClass()).classes.empty());
+
+  // With a 40 m limit everything is in range: g2 counts, d1 is its true positive, d3 a false one.
   EvaluationConfig wide = perClass();
   wide.max_longitudinal_m = 40.0;
-  EXPECT_EQ(evaluate(gt, {far_det}, wide).classes.at(0).ground_truth, 2U);
+  const ClassMetrics all = evaluate(gt, det, wide).classes.at(0);
+  EXPECT_EQ(all.ground_truth, 2U);
+  EXPECT_EQ(all.true_positives, 2U);
+  EXPECT_EQ(all.false_positives, 2U);
+}
+
+TEST(Evaluation, IgnoredTruthTakesItsDetectionsWhateverTheirMotion)
+{
+  // Three cars nobody scores: a difficult static one, a static one at 31 m (beyond the limit), one
+  // of unknown motion (difficult: too short a track to tell). A detection of each reporting
+  // another motion is ignored (before: a false positive of its motion class). A wrong motion on
+  // a counted car stays a false positive (and a miss).
+  const BoundingBox b{30.F, 0.F, 39.F, 9.F}, c{60.F, 0.F, 69.F, 9.F};
+  EvalObject difficult = object("a", "car", Motion::kStatic, kA);
+  difficult.difficult = true;
+  EvalObject beyond = object("a", "car", Motion::kStatic, b);
+  beyond.longitudinal_m = 31.0;
+  EvalObject unknown = object("a", "car", Motion::kUnknown, c);
+  unknown.difficult = true;
+  const std::vector<EvalObject> gt{difficult, beyond, unknown, object("b", "car", Motion::kStatic, kA)};
+  const std::vector<EvalObject> det{
+      object("a", "car", Motion::kDynamic, kA, 0.9F), object("a", "car", Motion::kDynamic, b, 0.8F),
+      object("a", "car", Motion::kStatic, c, 0.7F), object("b", "car", Motion::kDynamic, kA, 0.6F)};
+  EXPECT_EQ(detectionOutcomes(gt, det, EvaluationConfig{}),
+            (std::vector<DetectionOutcome>{
+                DetectionOutcome::kIgnoredDifficult, DetectionOutcome::kIgnoredBeyondRange,
+                DetectionOutcome::kIgnoredDifficult, DetectionOutcome::kFalsePositive}));
+  const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
+  EXPECT_EQ(find(r, "dynamicCar").false_positives, 1U);
+  EXPECT_EQ(find(r, "dynamicCar").ignored_difficult, 1U);
+  EXPECT_EQ(find(r, "dynamicCar").ignored_beyond_range, 1U);
+  EXPECT_EQ(find(r, "dynamicCar").ground_truth, 0U);
+  EXPECT_EQ(find(r, "staticCar").ground_truth, 1U);  // the counted car, missed
+  EXPECT_EQ(find(r, "staticCar").false_positives, 0U);
+  EXPECT_EQ(find(r, "staticCar").ignored_difficult, 1U);
+  // Per class only, as before: the same three ignored, the fourth a true positive.
+  const ClassMetrics car = evaluate(gt, det, perClass()).classes.at(0);
+  EXPECT_EQ(car.true_positives, 1U);
+  EXPECT_EQ(car.ignored_difficult + car.ignored_beyond_range, 3U);
+  EXPECT_EQ(truthClasses(beyond, EvaluationConfig{}),
+            (std::vector<std::string>{"staticCar", "unknownCar", "dynamicCar"}));
+  EXPECT_EQ(truthClasses(gt[3], EvaluationConfig{}), (std::vector<std::string>{"staticCar"}));
+}
+
+TEST(Evaluation, DontCareRegionsIgnoreFalsePositivesInThem)
+{
+  // A DontCare region R = (100..199)² in frame a, another over the car kA. Detections: d1 on the
+  // car (TP); d2 a duplicate of d1 (would be FP; inside the second region: ignored); d3 inside R
+  // (intersection / its area = 1: ignored); d4 a quarter inside R (0.25 < 0.5: FP); d5 inside R
+  // but in frame b (FP). The regions' label and motion play no part.
+  EvalObject region = object("a", "dontcare", Motion::kUnknown, BoundingBox{100.F, 100.F, 199.F, 199.F});
+  region.dont_care = true;
+  EvalObject over_car = object("a", "whatever", Motion::kUnknown, BoundingBox{0.F, 0.F, 20.F, 20.F});
+  over_car.dont_care = true;
+  const std::vector<EvalObject> gt{object("a", "car", Motion::kStatic, kA), region, over_car};
+  const std::vector<EvalObject> det{
+      object("a", "car", Motion::kStatic, kA, 0.9F), object("a", "car", Motion::kStatic, kA, 0.8F),
+      object("a", "car", Motion::kStatic, BoundingBox{110.F, 110.F, 189.F, 189.F}, 0.7F),
+      object("a", "car", Motion::kStatic, BoundingBox{150.F, 150.F, 249.F, 249.F}, 0.6F),
+      object("b", "car", Motion::kStatic, BoundingBox{110.F, 110.F, 189.F, 189.F}, 0.5F)};
+  const EvaluationResult r = evaluate(gt, det, perClass());
+  ASSERT_EQ(r.classes.size(), 1U);  // the regions are no class
+  const ClassMetrics& car = r.classes[0];
+  EXPECT_EQ(car.ground_truth, 1U);
+  EXPECT_EQ(car.true_positives, 1U);
+  EXPECT_EQ(car.false_positives, 2U);
+  EXPECT_EQ(car.ignored_dont_care, 2U);
+  EXPECT_EQ(
+      detectionOutcomes(gt, det, perClass()),
+      (std::vector<DetectionOutcome>{DetectionOutcome::kTruePositive, DetectionOutcome::kIgnoredDontCare,
+                                     DetectionOutcome::kIgnoredDontCare, DetectionOutcome::kFalsePositive,
+                                     DetectionOutcome::kFalsePositive}));
+  EXPECT_EQ(r.matched_objects.size(), 1U);
+  EXPECT_EQ(toString(DetectionOutcome::kIgnoredDontCare), "ignored_dont_care");
 }
 
 TEST(Evaluation, ErrorStatsQuantiles)

@@ -3,9 +3,12 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "grid_vision_fusion/evaluation/evaluation_report.h"
@@ -173,10 +176,228 @@ TEST(EvaluationReport, CartuchoFolders)
   EXPECT_EQ(readFile(dir / "ground-truth" / "000000.txt"), "dynamicCar 10.00 20.00 109.00 119.00\n");
   EXPECT_EQ(readFile(dir / "detection-results" / "000000.txt"),
             "dynamicCar 0.875000 10.00 20.00 109.00 119.00\n");
-  // The far van is filtered, but its frame still gets (empty) files in both folders.
+  // The van beyond the range limit is written as difficult (ignored, as evaluate() does), in the
+  // class of each motion; its frame has a (empty) detection file too.
   ASSERT_TRUE(fs::exists(dir / "ground-truth" / "000002.txt"));
-  EXPECT_EQ(readFile(dir / "ground-truth" / "000002.txt"), "");
+  EXPECT_EQ(readFile(dir / "ground-truth" / "000002.txt"),
+            "staticVan 10.00 20.00 109.00 119.00 difficult\nunknownVan 10.00 20.00 109.00 119.00 difficult\n"
+            "dynamicVan 10.00 20.00 109.00 119.00 difficult\n");
   EXPECT_TRUE(fs::exists(dir / "detection-results" / "000002.txt"));
+}
+
+namespace
+{
+/// What Cartucho/mAP's main.py computes from the two folders (a transcription of its matching
+/// and AP, github.com/Cartucho/mAP): per class its AP, the mAP over the classes with
+/// non-difficult ground truth, and whether a precision divided zero by zero (main.py then stops
+/// with ZeroDivisionError: the first detection of a class was ignored).
+struct CartuchoResult
+{
+  std::map<std::string, double> ap;
+  double map = 0.0;
+  bool zero_division = false;
+};
+
+struct CartuchoBox
+{
+  std::string label;
+  std::array<double, 4> box{};
+  bool difficult = false;
+  bool used = false;
+  double confidence = 0.0;
+  std::string file;
+};
+
+std::vector<std::string> fileIds(const fs::path& dir)
+{
+  std::vector<std::string> ids;
+  for (const auto& entry : fs::directory_iterator(dir))
+  {
+    ids.push_back(entry.path().stem().string());
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+CartuchoResult cartucho(const fs::path& dir, double min_overlap)
+{
+  std::map<std::string, std::vector<CartuchoBox>> truth;  // file id -> ground truth
+  std::map<std::string, std::size_t> counter;             // class -> non-difficult ground truth
+  for (const std::string& id : fileIds(dir / "ground-truth"))
+  {
+    std::istringstream lines(readFile(dir / "ground-truth" / (id + ".txt")));
+    for (std::string line; std::getline(lines, line);)
+    {
+      std::istringstream fields(line);
+      CartuchoBox b;
+      std::string flag;
+      fields >> b.label >> b.box[0] >> b.box[1] >> b.box[2] >> b.box[3] >> flag;
+      b.difficult = flag == "difficult";
+      counter[b.label] += b.difficult ? 0 : 1;
+      truth[id].push_back(b);
+    }
+  }
+  CartuchoResult result;
+  for (const auto& [label, count] : counter)
+  {
+    std::vector<CartuchoBox> dets;
+    for (const std::string& id : fileIds(dir / "detection-results"))
+    {
+      std::istringstream lines(readFile(dir / "detection-results" / (id + ".txt")));
+      for (std::string line; std::getline(lines, line);)
+      {
+        std::istringstream fields(line);
+        CartuchoBox d;
+        fields >> d.label >> d.confidence >> d.box[0] >> d.box[1] >> d.box[2] >> d.box[3];
+        d.file = id;
+        if (d.label == label)
+        {
+          dets.push_back(d);
+        }
+      }
+    }
+    std::stable_sort(dets.begin(), dets.end(),
+                     [](const CartuchoBox& a, const CartuchoBox& b) { return a.confidence > b.confidence; });
+    std::vector<double> tp(dets.size(), 0.0), fp(dets.size(), 0.0);
+    for (std::size_t i = 0; i < dets.size(); ++i)
+    {
+      const auto& bb = dets[i].box;
+      double ovmax = -1.0;
+      CartuchoBox* match = nullptr;
+      for (CartuchoBox& g : truth[dets[i].file])
+      {
+        if (g.label != label)
+        {
+          continue;
+        }
+        const double iw = std::min(bb[2], g.box[2]) - std::max(bb[0], g.box[0]) + 1.0;
+        const double ih = std::min(bb[3], g.box[3]) - std::max(bb[1], g.box[1]) + 1.0;
+        if (iw > 0.0 && ih > 0.0)
+        {
+          const double ua = (bb[2] - bb[0] + 1.0) * (bb[3] - bb[1] + 1.0) +
+                            (g.box[2] - g.box[0] + 1.0) * (g.box[3] - g.box[1] + 1.0) - iw * ih;
+          if (iw * ih / ua > ovmax)
+          {
+            ovmax = iw * ih / ua;
+            match = &g;
+          }
+        }
+      }
+      if (ovmax >= min_overlap)
+      {
+        if (!match->difficult)
+        {
+          (match->used ? fp : tp)[i] = 1.0;
+          match->used = true;
+        }
+      }
+      else
+      {
+        fp[i] = 1.0;
+      }
+    }
+    std::vector<double> rec{0.0}, prec{0.0};
+    for (std::size_t i = 0; i < dets.size(); ++i)
+    {
+      tp[i] += i > 0 ? tp[i - 1] : 0.0;
+      fp[i] += i > 0 ? fp[i - 1] : 0.0;
+      result.zero_division = result.zero_division || tp[i] + fp[i] == 0.0;
+      rec.push_back(tp[i] / static_cast<double>(count));
+      prec.push_back(tp[i] + fp[i] > 0.0 ? tp[i] / (tp[i] + fp[i]) : 0.0);
+    }
+    rec.push_back(1.0);
+    prec.push_back(0.0);
+    for (std::size_t i = prec.size() - 1; i-- > 0;)
+    {
+      prec[i] = std::max(prec[i], prec[i + 1]);
+    }
+    double ap = 0.0;
+    for (std::size_t i = 1; i < rec.size(); ++i)
+    {
+      ap += rec[i] != rec[i - 1] ? (rec[i] - rec[i - 1]) * prec[i] : 0.0;
+    }
+    if (count > 0)
+    {
+      result.ap[label] = ap;
+      result.map += ap;
+    }
+  }
+  std::size_t classes = 0;
+  for (const auto& entry : counter)
+  {
+    classes += entry.second > 0 ? 1 : 0;
+  }
+  result.map = classes ? result.map / static_cast<double>(classes) : 0.0;
+  return result;
+}
+}  // namespace
+
+TEST(EvaluationReport, CartuchoExportGivesTheSameApAndMap)
+{
+  // Frame 0: static cars A (10 m), B (difficult), C (31 m, beyond the limit), a DontCare region
+  // D, a dynamic van E. Frame 1: a static car A1, a dynamic car F. Frame 2: a static car A2.
+  const BoundingBox a{100.F, 100.F, 199.F, 199.F}, b{300.F, 100.F, 399.F, 199.F},
+      c{500.F, 100.F, 599.F, 199.F};
+  const BoundingBox d{700.F, 100.F, 799.F, 199.F}, e{900.F, 100.F, 999.F, 199.F},
+      nowhere{0.F, 300.F, 49.F, 349.F};
+  std::vector<EvalObject> gt{
+      object("0", "car", Motion::kStatic, a, 1.F),        object("0", "car", Motion::kStatic, b, 1.F),
+      object("0", "car", Motion::kStatic, c, 1.F, 31.0),  object("0", "dontcare", Motion::kUnknown, d, 1.F),
+      object("0", "van", Motion::kDynamic, e, 1.F, 15.0), object("1", "car", Motion::kStatic, a, 1.F, 20.0),
+      object("1", "car", Motion::kDynamic, b, 1.F, 25.0), object("2", "car", Motion::kStatic, a, 1.F, 29.0)};
+  gt[1].difficult = true;
+  gt[3].dont_care = true;
+  const std::vector<EvalObject> det{
+      object("0", "car", Motion::kStatic, c, 0.95F, 29.0),  // on C (beyond): ignored, first of its class
+      object("0", "car", Motion::kStatic, a, 0.9F),         // TP
+      object("0", "car", Motion::kStatic, b, 0.85F),        // on the difficult B: ignored
+      object("0", "car", Motion::kStatic, d, 0.8F),         // in the DontCare region: ignored
+      object("0", "car", Motion::kStatic, a, 0.75F),        // duplicate: FP
+      object("1", "car", Motion::kStatic, a, 0.7F, 31.0),   // TP although beyond the limit
+      object("1", "car", Motion::kStatic, nowhere, 0.65F, 33.0),  // beyond, matching nothing: left out
+      object("1", "car", Motion::kDynamic, b, 0.6F),              // TP
+      object("1", "car", Motion::kStatic, b, 0.55F),              // wrong motion: FP
+      object("0", "van", Motion::kDynamic, e, 0.5F),              // TP
+      object("2", "car", Motion::kStatic, nowhere, 0.45F),        // FP
+      object("2", "truck", Motion::kDynamic, nowhere, 0.4F),      // a class without ground truth
+      object("0", "car", Motion::kDynamic, c, 0.35F),             // C (beyond), wrong motion: ignored
+      object("0", "car", Motion::kDynamic, b, 0.3F)};             // B (difficult), wrong motion: ignored
+  const EvaluationConfig config;
+  const EvaluationResult result = evaluate(gt, det, config);
+  const fs::path dir = fs::path(testing::TempDir()) / "cartucho_map";
+  fs::remove_all(dir);
+  writeCartuchoFolders(dir.string(), gt, det, config);
+  EXPECT_EQ(fileIds(dir / "ground-truth"), fileIds(dir / "detection-results"));
+  // The ignored truths B and C in the class of each motion, for the detections of them that report
+  // another motion; no DontCare region.
+  EXPECT_EQ(
+      readFile(dir / "ground-truth" / "0.txt"),
+      "staticCar 100.00 100.00 199.00 199.00\n"
+      "staticCar 300.00 100.00 399.00 199.00 difficult\nunknownCar 300.00 100.00 399.00 199.00 difficult\n"
+      "dynamicCar 300.00 100.00 399.00 199.00 difficult\n"
+      "staticCar 500.00 100.00 599.00 199.00 difficult\nunknownCar 500.00 100.00 599.00 199.00 difficult\n"
+      "dynamicCar 500.00 100.00 599.00 199.00 difficult\n"
+      "dynamicVan 900.00 100.00 999.00 199.00\n");
+  // The true and false positives only.
+  EXPECT_EQ(readFile(dir / "detection-results" / "0.txt"),
+            "staticCar 0.900000 100.00 100.00 199.00 199.00\nstaticCar 0.750000 100.00 100.00 199.00 199.00\n"
+            "dynamicVan 0.500000 900.00 100.00 999.00 199.00\n");
+
+  const CartuchoResult cartucho_result = cartucho(dir, config.iou_threshold);
+  EXPECT_FALSE(cartucho_result.zero_division);
+  // staticCar: 3 counted truths; counted detections TP, FP, TP, FP, FP: AP = 1/3 · 1 + 1/3 · 2/3.
+  ASSERT_EQ(cartucho_result.ap.size(), 3U);
+  for (const ClassMetrics& m : result.classes)
+  {
+    if (m.ground_truth > 0)
+    {
+      ASSERT_EQ(cartucho_result.ap.count(m.name), 1U) << m.name;
+      EXPECT_NEAR(cartucho_result.ap.at(m.name), m.average_precision, 1e-12) << m.name;
+    }
+  }
+  EXPECT_NEAR(cartucho_result.ap.at("staticCar"), 1.0 / 3.0 + 2.0 / 9.0, 1e-12);
+  EXPECT_NEAR(cartucho_result.map, result.mean_average_precision, 1e-12);
+  EXPECT_NEAR(result.mean_average_precision, (5.0 / 9.0 + 1.0 + 1.0) / 3.0, 1e-12);
 }
 
 TEST(EvaluationReport, PrCurveIsDrawn)

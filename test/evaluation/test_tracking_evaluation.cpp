@@ -160,6 +160,40 @@ TEST(TrackingEvaluation, TimeToTheFirstDynamicVerdict)
   EXPECT_THROW(slow.validate(), std::invalid_argument);
 }
 
+TEST(TrackingEvaluation, RangeLimitAndDontCareRegions)
+{
+  // Frame 0: truth 3 at 31 m (beyond the 30 m limit), truth 4 at 20 m. Detections: id 1 on truth
+  // 3 from 29 m (ignored: its truth is beyond the limit); id 2 on truth 4 from 30.5 m (a match:
+  // the truth is in range); id 5 at 35 m matching nothing (ignored); id 6 in a DontCare region
+  // (ignored); id 7 inside the limit matching nothing (a false positive).
+  const BoundingBox kNowhere{700.F, 100.F, 799.F, 199.F};
+  const BoundingBox kIgnore{900.F, 100.F, 999.F, 199.F};
+  EvalObject far = object(0, 3, Motion::kStatic);
+  far.longitudinal_m = 31.0;
+  EvalObject region = object(0, -1, Motion::kUnknown, kIgnore, "dontcare");
+  region.dont_care = true;
+  auto at = [](EvalObject o, double longitudinal_m)
+  {
+    o.longitudinal_m = longitudinal_m;
+    return o;
+  };
+  const std::vector<EvalObject> detections{
+      at(object(0, 1, Motion::kStatic), 29.0), at(object(0, 2, Motion::kStatic, kElsewhere), 30.5),
+      at(object(0, 5, Motion::kStatic, kNowhere), 35.0), object(0, 6, Motion::kStatic, kIgnore),
+      object(0, 7, Motion::kStatic, BoundingBox{0.F, 300.F, 99.F, 399.F})};
+  const TrackingMetrics m = evaluateTracking({far, object(0, 4, Motion::kStatic, kElsewhere), region},
+                                             detections, TrackingEvaluationConfig{});
+  EXPECT_EQ(m.ground_truth, 1U);
+  EXPECT_EQ(m.matches, 1U);
+  EXPECT_EQ(m.misses, 0U);
+  EXPECT_EQ(m.false_positives, 1U);
+  EXPECT_EQ(m.truth_tracks, 1U);
+  // Identity measures count the matched and the false detection only: IDTP 1, IDFP 1, IDFN 0.
+  EXPECT_EQ(m.idtp, 1U);
+  EXPECT_EQ(m.idfp, 1U);
+  EXPECT_EQ(m.idfn, 0U);
+}
+
 TEST(TrackingEvaluation, LabelsAndRangeAndConfig)
 {
   EvalObject far = object(0, 3, Motion::kStatic);

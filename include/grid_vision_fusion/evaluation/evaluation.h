@@ -8,6 +8,16 @@
 // used), used -> FP (no fallback to the second best), a difficult ground truth -> ignored;
 // IoU below the threshold -> FP. IoU with the "+1 pixel" convention. AP = VOC2012 all-point
 // interpolation; mAP = mean AP over the classes present in the (non-difficult) ground truth.
+//
+// The range limit and the DontCare regions as the KITTI benchmark treats what it does not score
+// (devkit cpp/evaluate_object.cpp, evaluate_tracking.py): ground truth farther ahead than the
+// limit is ignored like difficult ground truth (a detection whose best match it is counts
+// neither as a true nor as a false positive, and it is never a miss); ignored ground truth is
+// matched in the class of every motion of its object class (truthClasses()), so that a
+// detection of it reporting another motion is ignored too; a detection farther ahead than the
+// limit counts only when it is a true positive (else it is left out); a detection that would be
+// a false positive and lies in a DontCare region (intersection / its own area >= the IoU
+// threshold) is ignored.
 #pragma once
 
 #include <array>
@@ -42,13 +52,19 @@ struct EvalObject
   /// A detection's probability that it moves (DetectedObject.p_dynamic), [0, 1]; negative when
   /// not given (label files, ground truth).
   double p_dynamic = -1.0;
+  /// Ground truth only: a KITTI DontCare region (its box), not an object: a detection of any
+  /// class that would be a false positive and lies in it (intersection / detection area >= the
+  /// IoU threshold) is ignored. Its label, motion and range play no part.
+  bool dont_care = false;
 };
 
 /// Parameters of evaluate().
 struct EvaluationConfig
 {
-  double iou_threshold = 0.5;        ///< minimum IoU of a true positive, (0, 1]
-  double max_longitudinal_m = 30.0;  ///< objects farther ahead are left out [m], > 0
+  double iou_threshold = 0.5;  ///< minimum IoU of a true positive, (0, 1]
+  /// Range limit [m], > 0: ground truth farther ahead is ignored (as difficult), detections
+  /// farther ahead count only as true positives (see the file comment).
+  double max_longitudinal_m = 30.0;
   /// Evaluate per motion x class ("dynamicCar"); false: per class only ("car").
   bool motion_classes = true;
 
@@ -64,6 +80,12 @@ struct ClassMetrics
   std::size_t detections = 0;    ///< detections counted (not ignored)
   std::size_t true_positives = 0;
   std::size_t false_positives = 0;
+  /// Detections not counted (DetectionOutcome): best match a difficult ground truth, best match
+  /// a ground truth beyond the range limit, in a DontCare region, beyond the limit themselves.
+  std::size_t ignored_difficult = 0;
+  std::size_t ignored_beyond_range = 0;
+  std::size_t ignored_dont_care = 0;
+  std::size_t left_out_beyond_range = 0;
   double precision = 0.0;  ///< at the operating point (all detections)
   double recall = 0.0;
   double f1 = 0.0;
@@ -149,8 +171,9 @@ using MotionCounts = std::array<std::size_t, 3>;
 /// Parameters of evaluateTracking().
 struct TrackingEvaluationConfig
 {
-  double iou_threshold = 0.5;        ///< minimum IoU of a match, (0, 1]
-  double max_longitudinal_m = 30.0;  ///< objects farther ahead are left out [m], > 0
+  double iou_threshold = 0.5;  ///< minimum IoU of a match, (0, 1]
+  /// Range limit [m], > 0, as EvaluationConfig::max_longitudinal_m.
+  double max_longitudinal_m = 30.0;
   /// Two changes of the reported motion of one ground-truth object within this time, while its
   /// truth motion stays the same, are a flicker [s], > 0.
   double flicker_window_s = 2.0;
@@ -177,7 +200,8 @@ struct DynamicLatency
 /// frame: same label and IoU >= the threshold; a ground-truth object keeps the detection id it
 /// had in its previous matched frame while that detection still qualifies, the rest are
 /// assigned by the Hungarian method on IoU. Detections that match only difficult ground truth
-/// are ignored. Ground-truth identities are the track_id of the ground truth (tracklets).
+/// or ground truth beyond the range, lie beyond it or in a DontCare region are ignored.
+/// Ground-truth identities are the track_id of the ground truth (tracklets).
 struct TrackingMetrics
 {
   std::size_t ground_truth = 0;     ///< ground-truth object-frames
@@ -249,9 +273,45 @@ struct EvaluationResult
   std::optional<TrackingMetrics> tracking;
 };
 
+/// Whether evaluate() ignores the ground-truth object `truth`: difficult, or beyond the range
+/// limit (DontCare regions are no ground truth at all).
+bool ignoredTruth(const EvalObject& truth, const EvaluationConfig& config);
+
+/// The evaluation classes whose matching takes the ground-truth object `truth`: its own first;
+/// with motion classes, an ignored one (ignoredTruth()) also that of every other motion of its
+/// object class ("unknownCar", "staticCar", "dynamicCar"): a detection of an object that is not
+/// scored is ignored whatever motion it reports.
+std::vector<std::string> truthClasses(const EvalObject& truth, const EvaluationConfig& config);
+
+/// What the matching of evaluate() (per evaluation class, Cartucho/mAP rules) makes of one
+/// detection. Only true and false positives are counted (in the precision, recall and AP).
+enum class DetectionOutcome : std::uint8_t
+{
+  kTruePositive = 0,
+  kFalsePositive = 1,
+  kIgnoredDifficult = 2,    ///< its best match (IoU >= threshold) is a difficult ground truth
+  kIgnoredBeyondRange = 3,  ///< its best match is a ground truth beyond max_longitudinal_m
+  kIgnoredDontCare = 4,     ///< a false positive otherwise, in a DontCare region of its frame
+  kLeftOutBeyondRange = 5,  ///< itself beyond max_longitudinal_m and no true positive
+};
+
+/// "true_positive", "false_positive", "ignored_difficult", "ignored_beyond_range",
+/// "ignored_dont_care" or "left_out_beyond_range".
+std::string toString(DetectionOutcome outcome);
+
+/// The outcome of every detection of `detections` (same order) in the matching of evaluate().
+/// @throws std::invalid_argument for an invalid config.
+std::vector<DetectionOutcome> detectionOutcomes(const std::vector<EvalObject>& ground_truth,
+                                                const std::vector<EvalObject>& detections,
+                                                const EvaluationConfig& config);
+
 /// Tracking figures of `detections` against `ground_truth` (see TrackingMetrics). Objects
 /// without a track_id (−1) count as detections and ground truth each with an identity of its
-/// own per frame.
+/// own per frame. The range limit and DontCare regions as in evaluate(): ground truth beyond the
+/// limit is ignored like difficult ground truth; a detection that matches no counted ground
+/// truth is ignored (neither a false positive nor counted by the identity measures) when it
+/// qualifies for an ignored one (same label, IoU >= threshold), lies beyond the limit or lies in
+/// a DontCare region.
 TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
                                  const std::vector<EvalObject>& detections,
                                  const TrackingEvaluationConfig& config);

@@ -29,7 +29,13 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
 /// Writes the Cartucho/mAP inputs under `dir`: ground-truth/<frame>.txt with lines
 /// "<class> <left> <top> <right> <bottom>[ difficult]" and detection-results/<frame>.txt with
 /// "<class> <score> <left> <top> <right> <bottom>", one file per frame of either list (empty when
-/// the frame has no object), classes named as evaluate() names them, the range filter applied.
+/// the frame has no object), classes named as evaluate() names them. Every ground-truth object
+/// is written, in each class of truthClasses() and marked difficult when evaluate() ignores it
+/// (difficult, beyond the range limit; DontCare regions are not written); of the detections only
+/// those evaluate() counts, its true and false
+/// positives (detectionOutcomes()): Cartucho/mAP then takes the same decision for each of them
+/// and gives the same AP per class and mAP. (It cannot see DontCare regions or a detection's
+/// range, and it divides by zero when the first detection of a class is ignored.)
 /// @throws std::runtime_error naming a file that cannot be written.
 void writeCartuchoFolders(const std::string& dir, const std::vector<EvalObject>& ground_truth,
                           const std::vector<EvalObject>& detections, const EvaluationConfig& config);
