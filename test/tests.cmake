@@ -36,7 +36,10 @@ gvf_gtest(test_kitti
 gvf_gtest(test_evaluation
   SOURCES test/evaluation/test_evaluation.cpp test/evaluation/test_evaluation_report.cpp
     test/evaluation/test_kitti_ground_truth.cpp test/evaluation/test_tracking_evaluation.cpp
-  LINK grid_vision_fusion_evaluation)
+    test/evaluation/test_tracking_labels.cpp
+  LINK grid_vision_fusion_evaluation
+  DEFINITIONS GVF_EVALUATE_TOOL="$<TARGET_FILE:evaluate>"
+  DEPENDS evaluate)
 gvf_gtest(test_simulation
   SOURCES test/simulation/test_synthetic_world.cpp test/simulation/test_synthetic_camera.cpp
     test/simulation/test_synthetic_scenario.cpp test/simulation/test_synthetic_drive.cpp

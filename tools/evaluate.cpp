@@ -1,6 +1,7 @@
 // evaluate: scores the detections of a run (a bag of DetectedObjectArray) against the ground
-// truth of a KITTI raw drive (tracklets + OXTS + calibration, or label files with a motion
-// column) and writes metrics.json, report.md, matches.csv, the Cartucho/mAP folders and the plots.
+// truth of a KITTI raw drive (tracklets, or the KITTI tracking labels of the drive's sequence, or
+// label files with a motion column; with the drive's OXTS and calibration) and writes
+// metrics.json, report.md, matches.csv, the Cartucho/mAP folders and the plots.
 //
 //   rosrun grid_vision_fusion evaluate --drive <drive_sync dir> --detections <bag> --output <dir>
 //
@@ -43,15 +44,19 @@ required:
 options:
   --calibration <dir>      folder of calib_cam_to_cam.txt, calib_velo_to_cam.txt,
                            calib_imu_to_velo.txt (default: the parent folder of --drive)
+  --tracking-labels <file> ground truth from a KITTI tracking label file (label_02/NNNN.txt of the
+                           sequence that is this drive) instead of tracklet_labels.xml; the drive
+                           still gives the time stamps, the ego poses and the calibration
   --labels <dir>           ground truth from label files <frame>.txt (KITTI object format plus a
-                           final static/dynamic column) instead of tracklet_labels.xml; the drive
-                           still gives the time stamps and the ego poses
+                           final static/dynamic column) instead of tracklet_labels.xml
   --topic <name>           DetectedObjectArray topic (default /objects)
   --world-frame <name>     expected header.frame_id of the detections (default world)
   --stamp-tolerance <s>    largest |message stamp - image stamp| of a match (default 0.05)
-  --max-range <m>          longitudinal distance limit (default 30)
+  --max-range <m>          longitudinal distance limit: ground truth beyond it is ignored,
+                           detections beyond it count only as true positives (default 30)
   --iou <x>                IoU of a true positive, (0, 1] (default 0.5)
   --dynamic-speed <m/s>    ground truth faster than this is dynamic (default 0.5)
+  --speed-window <s>       tracking labels: velocity fitted over at least this span (default 1)
   --max-truncation <x>     ground truth truncated more than this is difficult (default 0.5)
   --difficult-occlusion <n> ground truth occluded this much or more is difficult (default 2)
   --classes <a,b,...>      evaluate only these (lower-case) classes, e.g. car,van (default: all)
@@ -64,7 +69,7 @@ options:
 
 struct Options
 {
-  std::string drive, calibration, labels, detections, output;
+  std::string drive, calibration, labels, tracking_labels, detections, output;
   gvf::DetectionBagConfig bag;
   gvf::EvaluationConfig evaluation;
   gvf::KittiGroundTruthConfig truth;
@@ -127,6 +132,7 @@ Options parseArguments(int argc, char** argv)
       {"--drive", [&](const std::string&, const std::string& v) { o.drive = v; }},
       {"--calibration", [&](const std::string&, const std::string& v) { o.calibration = v; }},
       {"--labels", [&](const std::string&, const std::string& v) { o.labels = v; }},
+      {"--tracking-labels", [&](const std::string&, const std::string& v) { o.tracking_labels = v; }},
       {"--detections", [&](const std::string&, const std::string& v) { o.detections = v; }},
       {"--output", [&](const std::string&, const std::string& v) { o.output = v; }},
       {"--topic", [&](const std::string&, const std::string& v) { o.bag.topic = v; }},
@@ -139,6 +145,8 @@ Options parseArguments(int argc, char** argv)
        [&](const std::string& n, const std::string& v) { o.evaluation.iou_threshold = toNumber(n, v); }},
       {"--dynamic-speed",
        [&](const std::string& n, const std::string& v) { o.truth.dynamic_speed_mps = toNumber(n, v); }},
+      {"--speed-window",
+       [&](const std::string& n, const std::string& v) { o.truth.speed_window_s = toNumber(n, v); }},
       {"--max-truncation",
        [&](const std::string& n, const std::string& v) { o.truth.max_truncation = toNumber(n, v); }},
       {"--difficult-occlusion",
@@ -192,6 +200,10 @@ Options parseArguments(int argc, char** argv)
   {
     throw UsageError("--drive, --detections and --output are required");
   }
+  if (!o.labels.empty() && !o.tracking_labels.empty())
+  {
+    throw UsageError("--labels and --tracking-labels are two sources of ground truth: give one");
+  }
   if (!keep_only.empty())
   {
     // Keep the listed classes (after renaming): every other class is dropped.
@@ -222,17 +234,52 @@ Options parseArguments(int argc, char** argv)
   return o;
 }
 
+/// Where the ground truth comes from, in words.
+std::string truthSource(const Options& o)
+{
+  if (!o.tracking_labels.empty())
+  {
+    return o.tracking_labels;
+  }
+  return o.labels.empty() ? o.drive + "/tracklet_labels.xml" : o.labels;
+}
+
+/// The ground truth of the drive from the source the options name; warns on stderr about
+/// tracking labels beyond the drive's frames.
+std::vector<gvf::GroundTruthObject> readGroundTruth(const Options& o, const gvf::KittiDrive& drive)
+{
+  if (!o.labels.empty())
+  {
+    return gvf::labelFolderGroundTruth(o.labels, drive.calibration, o.truth);
+  }
+  if (o.tracking_labels.empty())
+  {
+    return gvf::trackletGroundTruth(drive, o.truth);
+  }
+  gvf::TrackingGroundTruth truth =
+      gvf::trackingLabelGroundTruth(gvf::readTrackingLabels(o.tracking_labels), drive, o.truth);
+  if (truth.beyond_drive > 0)
+  {
+    std::cerr << "warning: " << o.tracking_labels << ": " << truth.beyond_drive << " labels of frames "
+              << truth.first_frame_beyond << ".." << truth.last_frame_beyond << " (the first on line "
+              << truth.first_line_beyond << ") lie beyond the " << drive.frameCount() << " frames of "
+              << o.drive << "; left out (is it the label file of this drive?)\n";
+  }
+  return std::move(truth.objects);
+}
+
 int run(const Options& o)
 {
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::cerr << "Reading the drive " << o.drive << "\n";
-  const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, o.labels.empty());
-
-  std::vector<gvf::GroundTruthObject> truth =
-      o.labels.empty() ? gvf::trackletGroundTruth(drive, o.truth)
-                       : gvf::labelFolderGroundTruth(o.labels, drive.calibration, o.truth);
-  std::cerr << "Ground truth: " << truth.size() << " objects in " << drive.frameCount() << " frames from "
-            << (o.labels.empty() ? o.drive + "/tracklet_labels.xml" : o.labels) << "\n";
+  const bool tracklets = o.labels.empty() && o.tracking_labels.empty();
+  const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, tracklets);
+  std::vector<gvf::GroundTruthObject> truth = readGroundTruth(o, drive);
+  const auto regions = static_cast<std::size_t>(std::count_if(
+      truth.begin(), truth.end(), [](const gvf::GroundTruthObject& g) { return g.object.dont_care; }));
+  std::cerr << "Ground truth: " << truth.size() - regions << " objects"
+            << (regions ? " and " + std::to_string(regions) + " DontCare regions" : std::string()) << " in "
+            << drive.frameCount() << " frames from " << truthSource(o) << "\n";
 
   std::size_t bar_total = 0;
   std::unique_ptr<gvf::ProgressBar> progress;
@@ -298,7 +345,7 @@ int run(const Options& o)
 
   const std::vector<gvf::EvalObject> ground_truth = gvf::evalObjects(truth);
   gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
-  if (o.labels.empty())  // tracklets give the ground-truth identities
+  if (o.labels.empty())  // tracklets and tracking labels give the ground-truth identities
   {
     gvf::TrackingEvaluationConfig tracking;
     tracking.iou_threshold = o.evaluation.iou_threshold;

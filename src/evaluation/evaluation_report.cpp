@@ -404,7 +404,8 @@ std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfi
   if (result.tracking)
   {
     const TrackingMetrics& t = *result.tracking;
-    out << "\n## Tracking (CLEAR MOT and identity measures, ground-truth identities: the tracklets)\n\n"
+    out << "\n## Tracking (CLEAR MOT and identity measures, ground-truth identities: the tracklets or track "
+           "ids)\n\n"
         << "| MOTA [%] | IDF1 [%] | IDP [%] | IDR [%] | GT | matched | FP | missed | ID switches | per 100 "
            "matched | fragmentations |\n|---|---|---|---|---|---|---|---|---|---|---|\n"
         << "| " << percent(t.mota) << " | " << percent(t.idf1) << " | " << percent(t.idp) << " | "

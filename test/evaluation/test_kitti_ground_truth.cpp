@@ -275,6 +275,9 @@ TEST(KittiGroundTruth, ConfigValidation)
   config.speed_half_window = 0;
   EXPECT_NE(errorOf([&] { config.validate(); }).find("speed_half_window"), std::string::npos);
   config = KittiGroundTruthConfig{};
+  config.speed_window_s = 0.0;
+  EXPECT_NE(errorOf([&] { config.validate(); }).find("speed_window_s"), std::string::npos);
+  config = KittiGroundTruthConfig{};
   config.camera = 4;
   EXPECT_NE(errorOf([&] { config.validate(); }).find("camera"), std::string::npos);
   config = KittiGroundTruthConfig{};

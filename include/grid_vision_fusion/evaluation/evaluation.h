@@ -201,7 +201,7 @@ struct DynamicLatency
 /// had in its previous matched frame while that detection still qualifies, the rest are
 /// assigned by the Hungarian method on IoU. Detections that match only difficult ground truth
 /// or ground truth beyond the range, lie beyond it or in a DontCare region are ignored.
-/// Ground-truth identities are the track_id of the ground truth (tracklets).
+/// Ground-truth identities are the track_id of the ground truth (tracklets, tracking labels).
 struct TrackingMetrics
 {
   std::size_t ground_truth = 0;     ///< ground-truth object-frames

@@ -1,7 +1,10 @@
 // Ground truth for the evaluation from a KITTI raw drive (Geiger et al., IJRR 2013): 2-D boxes in
 // image 2 from the tracklets' 3-D boxes, motion state from the objects' speed over ground, 3-D
-// position and velocity in the world frame. Also a reader of per-frame label files in the KITTI
-// object format with a motion column, for data labelled elsewhere (e.g. KITTI MOD).
+// position and velocity in the world frame. Also from the labels of the KITTI tracking benchmark
+// (one file per sequence, label_02/NNNN.txt, a sequence being a raw drive frame for frame): the
+// labelled boxes, the track ids as identities, the velocity fitted over at least a second of each
+// track's world positions. And a reader of per-frame label files in the KITTI object format with
+// a motion column, for data labelled elsewhere (e.g. KITTI MOD).
 //
 // Frames:
 // - velodyne frame of frame i: where the tracklet poses of frame i live (x forward, y left, z up);
@@ -33,15 +36,21 @@ struct KittiGroundTruthConfig
   int camera = 2;  ///< camera whose rectified image holds the boxes, 0..3
   /// Objects moving faster than this over ground (horizontal world speed) are dynamic [m/s], ≥ 0.
   double dynamic_speed_mps = 0.5;
-  /// Velocity by differences over ±speed_half_window frames (one-sided at the ends) [frames], ≥ 1.
+  /// Tracklets: velocity by differences over ±speed_half_window frames (one-sided at the ends)
+  /// [frames], ≥ 1.
   int speed_half_window = 2;
+  /// Tracking labels: velocity by a least-squares line through the track's positions (the ego's
+  /// path laid along its heading, alongHeadingPoses()) over at least this span, centred where the
+  /// track allows (fittedVelocity()); a track whose positions span less has no speed (motion
+  /// unknown, difficult) [s], > 0.
+  double speed_window_s = 1.0;
   /// A box whose truncation (1 − clipped area / projected area) exceeds this is difficult, [0, 1].
   double max_truncation = 0.5;
   /// A tracklet pose with this occlusion flag or more (2 = heavily occluded) is difficult; labels:
   /// KITTI `occluded` ≥ this. 0..3.
   int difficult_occlusion = 2;
   /// A tracklet pose with this truncation flag (2 = out of image) is difficult (99 = unknown is
-  /// not). ≥ 1.
+  /// not); tracking labels: truncation level ≥ this (2 = heavily truncated). ≥ 1.
   int difficult_truncation_flag = 2;
   /// 3-D box edges are clipped against this depth in front of the camera before projecting [m], > 0.
   double near_plane_m = 0.1;
@@ -84,9 +93,11 @@ struct GroundTruthObject
 {
   EvalObject object;  ///< as handed to evaluate(); frame = kittiFrameName(frame_index)
   int frame_index = 0;
-  int tracklet = -1;        ///< index in the tracklet list (−1 for label files)
+  /// Index in the tracklet list; the track_id of tracking labels; −1 for label files and
+  /// DontCare regions.
+  int tracklet = -1;
   double truncation = 0.0;  ///< of the projected box, [0, 1]
-  double speed_mps = 0.0;   ///< horizontal world speed (tracklets only)
+  double speed_mps = 0.0;   ///< horizontal world speed (tracklets and tracking labels)
   Eigen::Vector3d velo_center = Eigen::Vector3d::Zero();  ///< box centre, velodyne frame [m]
 };
 
@@ -104,6 +115,26 @@ bool projectVeloBox(const KittiRawCalibration& calibration, int camera,
 /// @throws std::invalid_argument when sizes differ or the times do not increase.
 Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions,
                                    const std::vector<double>& times, std::size_t j, int half_window);
+
+/// Velocity at sample `j` of a trajectory: the slope of the least-squares line through the
+/// positions of samples lo..hi against their times, where lo..hi grows from j one sample at a
+/// time, on the side whose next sample is nearer in time to sample j (the lower on a tie), until
+/// times[hi] − times[lo] ≥ window_s or the whole trajectory is used: centred inside the
+/// trajectory, one-sided at its ends. Zero when the trajectory has one sample.
+/// @throws std::invalid_argument when sizes differ, j is out of range, window_s is not > 0 or
+/// the times do not increase.
+Eigen::Vector3d fittedVelocity(const std::vector<Eigen::Vector3d>& positions,
+                               const std::vector<double>& times, std::size_t j, double window_s);
+
+/// The poses `world_from_imu` with their positions laid along their heading: position 0 kept,
+/// position i+1 = position i + ((p_{i+1} − p_i) · h) h with h the unit mean of the IMU x axes
+/// (forward) of poses i and i+1; the orientations kept. A vehicle does not slip sideways, but the
+/// OXTS positions of a raw drive do: on 2011_09_26 drive 0009 they run 1–2° to the right of the
+/// OXTS heading (0.1–0.4 m/s sideways at 10.5 m/s, while its INS reports 0.1–0.2 m/s to the left),
+/// and a parked car's world position drifts with them. Laid along the heading, each step keeps
+/// its length along the vehicle and loses that drift; the ego's speed, its turns and the world
+/// frame's orientation stay the OXTS ones.
+std::vector<Eigen::Isometry3d> alongHeadingPoses(const std::vector<Eigen::Isometry3d>& world_from_imu);
 
 /// Ground truth of every tracklet pose of `drive` (see the file comment and the config). A
 /// tracklet with a single pose has no velocity: motion unknown and difficult. Boxes that do not
@@ -137,6 +168,59 @@ std::vector<MotionLabel> readMotionLabels(const std::string& path);
 std::vector<GroundTruthObject> labelFolderGroundTruth(const std::string& label_dir,
                                                       const KittiRawCalibration& calibration,
                                                       const KittiGroundTruthConfig& config);
+
+/// One line of a KITTI tracking benchmark label file (label_02/NNNN.txt):
+///   frame track_id type truncated occluded alpha left top right bottom h w l x y z rotation_y [score]
+/// (Geiger et al., devkit of the tracking benchmark; 3-D values in the rectified camera-0 frame).
+struct TrackingLabel
+{
+  int frame = 0;      ///< frame index in the sequence (= in the raw drive), ≥ 0
+  int track_id = -1;  ///< the object's identity over the sequence, ≥ 0; −1 for DontCare
+  /// The other columns in the object format; `truncated` holds the tracking benchmark's
+  /// truncation level 0 (not), 1 (partly), 2 (heavily truncated), `occluded` 0 (visible),
+  /// 1 (partly), 2 (largely occluded), 3 (unknown); both −1 for DontCare.
+  KittiObjectLabel object;
+  std::size_t line = 0;  ///< 1-based line in the file
+  bool dontCare() const { return lowerCase(object.type) == "dontcare"; }
+};
+
+/// Parses a tracking label file: 17 fields per line, or 18 with a score; blank lines skipped.
+/// @throws KittiLabelError "<source_name>:<line>: <what>" for a line with another number of
+/// fields, a frame that is not an integer ≥ 0, an object (any type but DontCare) whose track_id
+/// is not an integer ≥ 0, whose truncation level is not 0, 1 or 2, whose occlusion level is not
+/// 0..3 or whose dimensions are not > 0, a number that is not finite, a box with right < left or
+/// bottom < top, or a track_id that appears twice in one frame.
+std::vector<TrackingLabel> parseTrackingLabels(std::istream& input, const std::string& source_name);
+/// Reads a tracking label file. @throws KittiLabelError naming the file (and line).
+std::vector<TrackingLabel> readTrackingLabels(const std::string& path);
+
+/// Ground truth from tracking labels, with what was left out of them.
+struct TrackingGroundTruth
+{
+  /// The objects and the DontCare regions (object.dont_care), in frame order.
+  std::vector<GroundTruthObject> objects;
+  std::size_t dont_care = 0;  ///< DontCare regions among them
+  /// Labels of frames the drive does not have (≥ frameCount()), left out: how many, the
+  /// smallest and largest such frame, the line of the first such label (in the list's order).
+  std::size_t beyond_drive = 0;
+  int first_frame_beyond = -1;
+  int last_frame_beyond = -1;
+  std::size_t first_line_beyond = 0;
+};
+
+/// Ground truth of `labels` on `drive` (its time stamps, OXTS poses and calibration). Per object
+/// line: the labelled box clipped to the image of `camera`; the label (labelOf(), dropped when
+/// empty); identity (object.track_id, tracklet) = track_id; the box centre (x, y − h/2, z) in
+/// the rectified camera-0 frame → velodyne → world through the frame's OXTS pose (position,
+/// longitudinal distance = its velodyne x); velocity fittedVelocity() with `speed_window_s` over
+/// the track's positions through the poses alongHeadingPoses() (in world axes), speed over
+/// ground |(v_x, v_y)|, dynamic above `dynamic_speed_mps`; a track spanning less than
+/// `speed_window_s` has motion unknown and is difficult. Difficult as tracklets: the 3-D box projected
+/// (projectVeloBox()) is truncated by more than `max_truncation`, or truncation level ≥
+/// `difficult_truncation_flag`, or occlusion level ≥ `difficult_occlusion`. DontCare lines become DontCare
+/// regions (box clipped).
+TrackingGroundTruth trackingLabelGroundTruth(const std::vector<TrackingLabel>& labels,
+                                             const KittiDrive& drive, const KittiGroundTruthConfig& config);
 
 /// The index of the frame whose time is nearest to `t` (times sorted ascending), or −1 when
 /// none lies within `tolerance_s`.
