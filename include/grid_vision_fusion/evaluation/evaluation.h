@@ -45,8 +45,9 @@ struct EvalObject
   bool has_state = false;       ///< position/velocity below are valid
   double x = 0.0, y = 0.0;      ///< position [m] (world frame)
   double vx = 0.0, vy = 0.0;    ///< velocity [m/s] (world frame)
-  /// Identity across frames: the tracklet of a ground-truth object, DetectedObject.id of a
-  /// detection; −1 when unknown (label files). Only the tracking metrics use it.
+  /// Identity across frames: the tracklet (or the tracking labels' track_id) of a ground-truth
+  /// object, DetectedObject.id of a detection; −1 when unknown (label files). Only the tracking
+  /// metrics use it.
   std::int64_t track_id = -1;
   double time_s = 0.0;  ///< time of the frame [s] (the tracking metrics' flicker window)
   /// A detection's probability that it moves (DetectedObject.p_dynamic), [0, 1]; negative when
@@ -138,7 +139,7 @@ struct MatchedObject
   double position_error_m = 0.0;
   double speed_error_mps = 0.0;
   double heading_error_rad = 0.0;  ///< NaN unless both are dynamic (as heading_error_rad below)
-  std::int64_t truth_id = -1;      ///< the ground truth's track_id (tracklet), −1 when unknown
+  std::int64_t truth_id = -1;      ///< the ground truth's track_id (tracklet, track), −1 when unknown
   std::int64_t track_id = -1;      ///< the detection's track_id (DetectedObject.id), −1 when unknown
   double p_dynamic = -1.0;         ///< the detection's P(dynamic), negative when not given
 };
