@@ -486,7 +486,8 @@ bool ignoredTruth(const EvalObject& truth, const EvaluationConfig& config)
 std::vector<std::string> truthClasses(const EvalObject& truth, const EvaluationConfig& config)
 {
   std::vector<std::string> names{evaluationClass(truth.label, truth.motion, config.motion_classes)};
-  if (config.motion_classes && ignoredTruth(truth, config))
+  const bool unscored = !inRange(truth, config.max_longitudinal_m) || truth.motion == Motion::kUnknown;
+  if (config.motion_classes && ignoredTruth(truth, config) && unscored)
   {
     for (const Motion motion : {Motion::kUnknown, Motion::kStatic, Motion::kDynamic})
     {

@@ -214,12 +214,13 @@ TEST(Evaluation, RangeLimitIgnoresFarTruthAndLeavesOutFarFalsePositives)
   EXPECT_EQ(all.false_positives, 2U);
 }
 
-TEST(Evaluation, IgnoredTruthTakesItsDetectionsWhateverTheirMotion)
+TEST(Evaluation, UnscoredTruthTakesItsDetectionsWhateverTheirMotion)
 {
-  // Three cars nobody scores: a difficult static one, a static one at 31 m (beyond the limit), one
-  // of unknown motion (difficult: too short a track to tell). A detection of each reporting
-  // another motion is ignored (before: a false positive of its motion class). A wrong motion on
-  // a counted car stays a false positive (and a miss).
+  // Two cars nobody scores: a static one at 31 m (beyond the limit), one of unknown motion
+  // (difficult: too short a track to tell). A detection of each reporting a motion they do not
+  // have is ignored (before: a false positive of its motion class). A difficult car of known
+  // motion keeps the paper's rule: a detection of it with the other motion is a false positive of
+  // that class; so is a wrong motion on a counted car (which is missed too).
   const BoundingBox b{30.F, 0.F, 39.F, 9.F}, c{60.F, 0.F, 69.F, 9.F};
   EvalObject difficult = object("a", "car", Motion::kStatic, kA);
   difficult.difficult = true;
@@ -231,25 +232,28 @@ TEST(Evaluation, IgnoredTruthTakesItsDetectionsWhateverTheirMotion)
   const std::vector<EvalObject> det{
       object("a", "car", Motion::kDynamic, kA, 0.9F), object("a", "car", Motion::kDynamic, b, 0.8F),
       object("a", "car", Motion::kStatic, c, 0.7F), object("b", "car", Motion::kDynamic, kA, 0.6F)};
-  EXPECT_EQ(detectionOutcomes(gt, det, EvaluationConfig{}),
-            (std::vector<DetectionOutcome>{
-                DetectionOutcome::kIgnoredDifficult, DetectionOutcome::kIgnoredBeyondRange,
-                DetectionOutcome::kIgnoredDifficult, DetectionOutcome::kFalsePositive}));
+  EXPECT_EQ(
+      detectionOutcomes(gt, det, EvaluationConfig{}),
+      (std::vector<DetectionOutcome>{DetectionOutcome::kFalsePositive, DetectionOutcome::kIgnoredBeyondRange,
+                                     DetectionOutcome::kIgnoredDifficult, DetectionOutcome::kFalsePositive}));
   const EvaluationResult r = evaluate(gt, det, EvaluationConfig{});
-  EXPECT_EQ(find(r, "dynamicCar").false_positives, 1U);
-  EXPECT_EQ(find(r, "dynamicCar").ignored_difficult, 1U);
+  EXPECT_EQ(find(r, "dynamicCar").false_positives, 2U);
   EXPECT_EQ(find(r, "dynamicCar").ignored_beyond_range, 1U);
   EXPECT_EQ(find(r, "dynamicCar").ground_truth, 0U);
   EXPECT_EQ(find(r, "staticCar").ground_truth, 1U);  // the counted car, missed
   EXPECT_EQ(find(r, "staticCar").false_positives, 0U);
   EXPECT_EQ(find(r, "staticCar").ignored_difficult, 1U);
-  // Per class only, as before: the same three ignored, the fourth a true positive.
+  // Per class only, as before: three ignored, the fourth a true positive.
   const ClassMetrics car = evaluate(gt, det, perClass()).classes.at(0);
   EXPECT_EQ(car.true_positives, 1U);
   EXPECT_EQ(car.ignored_difficult + car.ignored_beyond_range, 3U);
   EXPECT_EQ(truthClasses(beyond, EvaluationConfig{}),
             (std::vector<std::string>{"staticCar", "unknownCar", "dynamicCar"}));
+  EXPECT_EQ(truthClasses(unknown, EvaluationConfig{}),
+            (std::vector<std::string>{"unknownCar", "staticCar", "dynamicCar"}));
+  EXPECT_EQ(truthClasses(difficult, EvaluationConfig{}), (std::vector<std::string>{"staticCar"}));
   EXPECT_EQ(truthClasses(gt[3], EvaluationConfig{}), (std::vector<std::string>{"staticCar"}));
+  EXPECT_EQ(truthClasses(beyond, perClass()), (std::vector<std::string>{"car"}));
 }
 
 TEST(Evaluation, DontCareRegionsIgnoreFalsePositivesInThem)

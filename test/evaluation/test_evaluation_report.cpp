@@ -361,27 +361,26 @@ TEST(EvaluationReport, CartuchoExportGivesTheSameApAndMap)
       object("2", "car", Motion::kStatic, nowhere, 0.45F),        // FP
       object("2", "truck", Motion::kDynamic, nowhere, 0.4F),      // a class without ground truth
       object("0", "car", Motion::kDynamic, c, 0.35F),             // C (beyond), wrong motion: ignored
-      object("0", "car", Motion::kDynamic, b, 0.3F)};             // B (difficult), wrong motion: ignored
+      object("0", "car", Motion::kDynamic, b, 0.3F)};             // B (difficult), wrong motion: FP
   const EvaluationConfig config;
   const EvaluationResult result = evaluate(gt, det, config);
   const fs::path dir = fs::path(testing::TempDir()) / "cartucho_map";
   fs::remove_all(dir);
   writeCartuchoFolders(dir.string(), gt, det, config);
   EXPECT_EQ(fileIds(dir / "ground-truth"), fileIds(dir / "detection-results"));
-  // The ignored truths B and C in the class of each motion, for the detections of them that report
-  // another motion; no DontCare region.
+  // The difficult B in its class, C (beyond the limit) in the class of each motion, for the
+  // detections of it that report another motion; no DontCare region.
   EXPECT_EQ(
       readFile(dir / "ground-truth" / "0.txt"),
-      "staticCar 100.00 100.00 199.00 199.00\n"
-      "staticCar 300.00 100.00 399.00 199.00 difficult\nunknownCar 300.00 100.00 399.00 199.00 difficult\n"
-      "dynamicCar 300.00 100.00 399.00 199.00 difficult\n"
+      "staticCar 100.00 100.00 199.00 199.00\nstaticCar 300.00 100.00 399.00 199.00 difficult\n"
       "staticCar 500.00 100.00 599.00 199.00 difficult\nunknownCar 500.00 100.00 599.00 199.00 difficult\n"
       "dynamicCar 500.00 100.00 599.00 199.00 difficult\n"
       "dynamicVan 900.00 100.00 999.00 199.00\n");
   // The true and false positives only.
-  EXPECT_EQ(readFile(dir / "detection-results" / "0.txt"),
-            "staticCar 0.900000 100.00 100.00 199.00 199.00\nstaticCar 0.750000 100.00 100.00 199.00 199.00\n"
-            "dynamicVan 0.500000 900.00 100.00 999.00 199.00\n");
+  EXPECT_EQ(
+      readFile(dir / "detection-results" / "0.txt"),
+      "staticCar 0.900000 100.00 100.00 199.00 199.00\nstaticCar 0.750000 100.00 100.00 199.00 199.00\n"
+      "dynamicVan 0.500000 900.00 100.00 999.00 199.00\ndynamicCar 0.300000 300.00 100.00 399.00 199.00\n");
 
   const CartuchoResult cartucho_result = cartucho(dir, config.iou_threshold);
   EXPECT_FALSE(cartucho_result.zero_division);
@@ -397,6 +396,7 @@ TEST(EvaluationReport, CartuchoExportGivesTheSameApAndMap)
   }
   EXPECT_NEAR(cartucho_result.ap.at("staticCar"), 1.0 / 3.0 + 2.0 / 9.0, 1e-12);
   EXPECT_NEAR(cartucho_result.map, result.mean_average_precision, 1e-12);
+  // dynamicCar: F found (0.6) before the false B (0.3): AP 1.
   EXPECT_NEAR(result.mean_average_precision, (5.0 / 9.0 + 1.0 + 1.0) / 3.0, 1e-12);
 }
 

@@ -12,12 +12,12 @@
 // The range limit and the DontCare regions as the KITTI benchmark treats what it does not score
 // (devkit cpp/evaluate_object.cpp, evaluate_tracking.py): ground truth farther ahead than the
 // limit is ignored like difficult ground truth (a detection whose best match it is counts
-// neither as a true nor as a false positive, and it is never a miss); ignored ground truth is
-// matched in the class of every motion of its object class (truthClasses()), so that a
-// detection of it reporting another motion is ignored too; a detection farther ahead than the
-// limit counts only when it is a true positive (else it is left out); a detection that would be
-// a false positive and lies in a DontCare region (intersection / its own area >= the IoU
-// threshold) is ignored.
+// neither as a true nor as a false positive, and it is never a miss); it, and ignored ground
+// truth of unknown motion, is matched in the class of every motion of its object class
+// (truthClasses()), so that a detection of it reporting any motion is ignored; a detection
+// farther ahead than the limit counts only when it is a true positive (else it is left out); a
+// detection that would be a false positive and lies in a DontCare region (intersection / its
+// own area >= the IoU threshold) is ignored.
 #pragma once
 
 #include <array>
@@ -279,9 +279,12 @@ struct EvaluationResult
 bool ignoredTruth(const EvalObject& truth, const EvaluationConfig& config);
 
 /// The evaluation classes whose matching takes the ground-truth object `truth`: its own first;
-/// with motion classes, an ignored one (ignoredTruth()) also that of every other motion of its
-/// object class ("unknownCar", "staticCar", "dynamicCar"): a detection of an object that is not
-/// scored is ignored whatever motion it reports.
+/// with motion classes, ground truth beyond the range limit and ignored ground truth of unknown
+/// motion (a tracklet of one pose, a track too short to fit) also that of every other motion of
+/// its object class ("unknownCar", "staticCar", "dynamicCar"): a detection of an object beyond
+/// the range, or of one whose motion nobody knows, is ignored whatever motion it reports. (A
+/// difficult object of known motion stays in its own class, as in the paper: a detection of it
+/// with the other motion is a false positive of its class.)
 std::vector<std::string> truthClasses(const EvalObject& truth, const EvaluationConfig& config);
 
 /// What the matching of evaluate() (per evaluation class, Cartucho/mAP rules) makes of one
