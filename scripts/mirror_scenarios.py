@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the mirror images of scenario files (the YAML format of make_synthetic_drive): every
-position's y and every heading and turn rate negated, the road's centre line too, and the seed
-moved by --seed-offset. A drive the filter was not tuned on, with the same traffic: the bends
+position's y and every heading and turn rate negated, the road's centre line too, the ground's
+left and right verges swapped, the INS's heading drift negated, and the seed moved by
+--seed-offset. A drive the filter was not tuned on, with the same traffic: the bends
 turn the other way, the parked rows and the pedestrians change sides, the lidar and the camera
 see every object from the other side and the lidar's noise differs. Scenarios that take the
 ego's motion from a recorded drive (a "# suite-from-drive:" line) are skipped: a recorded drive
@@ -20,7 +21,7 @@ import sys
 import yaml
 
 MOTION_KEYS = ("parked", "waypoints", "constant_turn")
-ENTRY_KEYS = ("type", "size", "color", "yaw") + MOTION_KEYS
+ENTRY_KEYS = ("type", "size", "color", "yaw", "shape") + MOTION_KEYS
 
 
 class ScenarioError(Exception):
@@ -62,6 +63,16 @@ def mirror(scenario, seed_offset, source):
     road = scenario.get("road")
     if isinstance(road, dict) and "center_y" in road:
         road["center_y"] = -road["center_y"]
+    ground = scenario.get("ground")
+    if isinstance(ground, dict):
+        left, right = ground.pop("verge_rise_left", None), ground.pop("verge_rise_right", None)
+        if right is not None:
+            ground["verge_rise_left"] = right
+        if left is not None:
+            ground["verge_rise_right"] = left
+    ins = scenario.get("ins_error")
+    if isinstance(ins, dict) and "yaw_drift_rate" in ins:
+        ins["yaw_drift_rate"] = -ins["yaw_drift_rate"]
     mirror_motion(scenario["ego"], "%s: ego" % source)
     for i, actor in enumerate(scenario.get("actors") or []):
         mirror_motion(actor, "%s: actors[%d]" % (source, i))

@@ -60,109 +60,156 @@ int parseInt(const std::string& option, const std::string& value)
   }
   throw std::invalid_argument(option + " needs an integer, got \"" + value + "\"");
 }
+/// The command line.
+struct Arguments
+{
+  grid_vision_fusion::SyntheticDriveOptions options;
+  std::string scenario_path;
+  std::string recorded_drive;
+  int seed = -1;
+  bool help = false;
+};
+
+/// Parses the options into `args`. Returns an error message ("" when fine).
+std::string parseArguments(int argc, char** argv, Arguments& args)
+{
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help")
+    {
+      args.help = true;
+      return "";
+    }
+    if (i + 1 >= argc)
+    {
+      return "option " + arg + " needs a value (or is unknown)\n\n" + kUsage;
+    }
+    const std::string value = argv[++i];
+    if (arg == "--output")
+    {
+      args.options.output_root = value;
+    }
+    else if (arg == "--scenario")
+    {
+      args.scenario_path = value;
+    }
+    else if (arg == "--calibration")
+    {
+      args.options.calibration_dir = value;
+    }
+    else if (arg == "--date")
+    {
+      args.options.date = value;
+    }
+    else if (arg == "--drive")
+    {
+      args.options.drive_number = parseInt(arg, value);
+    }
+    else if (arg == "--frames")
+    {
+      args.options.max_frames = parseInt(arg, value);
+    }
+    else if (arg == "--seed")
+    {
+      args.seed = parseInt(arg, value);
+    }
+    else if (arg == "--from-drive")
+    {
+      args.recorded_drive = value;
+    }
+    else
+    {
+      return "unknown option " + arg + "\n\n" + kUsage;
+    }
+  }
+  if (args.options.output_root.empty())
+  {
+    return std::string("--output is required\n\n") + kUsage;
+  }
+  return "";
+}
+
+/// The scenario of the command line: its file, or the recorded drive in the world of --scenario.
+grid_vision_fusion::SyntheticScenario loadArgumentsScenario(Arguments& args)
+{
+  using namespace grid_vision_fusion;
+  const bool explicit_scenario = !args.scenario_path.empty();
+  if (args.scenario_path.empty() || args.options.calibration_dir.empty())
+  {
+    const std::string package = packagePath(
+        args.scenario_path.empty()
+            ? (args.options.calibration_dir.empty() ? "--scenario and --calibration" : "--scenario")
+            : "--calibration");
+    if (args.scenario_path.empty())
+    {
+      args.scenario_path = package + "/config/synthetic_drive.yaml";
+    }
+    if (args.options.calibration_dir.empty())
+    {
+      args.options.calibration_dir = package + "/data/calibration/2011_09_26";
+    }
+  }
+  SyntheticScenario scenario;
+  if (args.recorded_drive.empty())
+  {
+    scenario = loadScenario(args.scenario_path);
+  }
+  else
+  {
+    const SyntheticScenario base = explicit_scenario ? loadScenario(args.scenario_path) : SyntheticScenario{};
+    scenario = recordedDriveScenario(args.recorded_drive,
+                                     KittiRawCalibration::readDirectory(args.options.calibration_dir), base);
+    args.scenario_path = args.recorded_drive;
+  }
+  if (args.seed >= 0)
+  {
+    scenario.seed = static_cast<std::uint32_t>(args.seed);
+  }
+  return scenario;
+}
+
+/// ", with car profiles, a ground profile, an INS error" for what the scenario turns on.
+std::string realismNote(const grid_vision_fusion::SyntheticScenario& scenario)
+{
+  std::string note;
+  const auto add = [&](bool on, const char* what)
+  { note += on ? (note.empty() ? " with " : ", ") + std::string(what) : ""; };
+  bool profiles = false;
+  for (const auto& actor : scenario.actors)
+  {
+    profiles = profiles || actor.shape != grid_vision_fusion::VehicleShape::kBox;
+  }
+  add(profiles, "vehicle profiles");
+  add(scenario.ground.profiled() || scenario.ground.slope_x != 0.0, "a ground that is not flat");
+  add(scenario.ins_error.enabled(), "an INS error in the OXTS records");
+  return note;
+}
 }  // namespace
 
 int main(int argc, char** argv)
 {
   using namespace grid_vision_fusion;
-  SyntheticDriveOptions options;
-  std::string scenario_path;
-  std::string recorded_drive;
-  int seed = -1;
   try
   {
-    for (int i = 1; i < argc; ++i)
+    Arguments args;
+    const std::string error = parseArguments(argc, argv, args);
+    if (!error.empty())
     {
-      const std::string arg = argv[i];
-      if (arg == "-h" || arg == "--help")
-      {
-        std::cout << kUsage;
-        return 0;
-      }
-      if (i + 1 >= argc)
-      {
-        return fail("option " + arg + " needs a value (or is unknown)\n\n" + kUsage);
-      }
-      const std::string value = argv[++i];
-      if (arg == "--output")
-      {
-        options.output_root = value;
-      }
-      else if (arg == "--scenario")
-      {
-        scenario_path = value;
-      }
-      else if (arg == "--calibration")
-      {
-        options.calibration_dir = value;
-      }
-      else if (arg == "--date")
-      {
-        options.date = value;
-      }
-      else if (arg == "--drive")
-      {
-        options.drive_number = parseInt(arg, value);
-      }
-      else if (arg == "--frames")
-      {
-        options.max_frames = parseInt(arg, value);
-      }
-      else if (arg == "--seed")
-      {
-        seed = parseInt(arg, value);
-      }
-      else if (arg == "--from-drive")
-      {
-        recorded_drive = value;
-      }
-      else
-      {
-        return fail("unknown option " + arg + "\n\n" + kUsage);
-      }
+      return fail(error);
     }
-    if (options.output_root.empty())
+    if (args.help)
     {
-      return fail(std::string("--output is required\n\n") + kUsage);
+      std::cout << kUsage;
+      return 0;
     }
-    const bool explicit_scenario = !scenario_path.empty();
-    if (scenario_path.empty() || options.calibration_dir.empty())
-    {
-      const std::string package =
-          packagePath(scenario_path.empty()
-                          ? (options.calibration_dir.empty() ? "--scenario and --calibration" : "--scenario")
-                          : "--calibration");
-      if (scenario_path.empty())
-      {
-        scenario_path = package + "/config/synthetic_drive.yaml";
-      }
-      if (options.calibration_dir.empty())
-      {
-        options.calibration_dir = package + "/data/calibration/2011_09_26";
-      }
-    }
-
-    SyntheticScenario scenario;
-    if (recorded_drive.empty())
-    {
-      scenario = loadScenario(scenario_path);
-    }
-    else
-    {
-      const SyntheticScenario base = explicit_scenario ? loadScenario(scenario_path) : SyntheticScenario{};
-      scenario = recordedDriveScenario(recorded_drive,
-                                       KittiRawCalibration::readDirectory(options.calibration_dir), base);
-      scenario_path = recorded_drive;
-    }
-    if (seed >= 0)
-    {
-      scenario.seed = static_cast<std::uint32_t>(seed);
-    }
+    const SyntheticScenario scenario = loadArgumentsScenario(args);
+    const SyntheticDriveOptions& options = args.options;
     const int frames =
         options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
-    std::cerr << "make_synthetic_drive: " << scenario_path << ": " << scenario.actors.size() << " actors, "
-              << scenario.scenery.size() << " buildings, " << frames << " frames at "
-              << scenario.frame_rate_hz << " Hz\n";
+    std::cerr << "make_synthetic_drive: " << args.scenario_path << ": " << scenario.actors.size()
+              << " actors, " << scenario.scenery.size() << " buildings, " << frames << " frames at "
+              << scenario.frame_rate_hz << " Hz" << realismNote(scenario) << "\n";
     ProgressBar bar(std::cerr, static_cast<std::size_t>(frames), "frames", isatty(STDERR_FILENO) != 0);
     const SyntheticDriveSummary summary = writeSyntheticDrive(
         scenario, options, [&](int done, int) { bar.update(static_cast<std::size_t>(done)); });

@@ -20,7 +20,7 @@ constexpr double kHazeDistanceM = 180.0;
 constexpr double kLineHalfWidthM = 0.08;
 constexpr double kDashLengthM = 3.0;
 constexpr double kDashPeriodM = 9.0;
-constexpr double kWindowFraction = 0.6;  // actors: above this fraction of their height, glass
+constexpr double kWindowFraction = 0.6;  // box actors: above this fraction of their height, glass
 
 /// 0xRRGGBB → OpenCV's BGR order.
 cv::Vec3d toVec(std::uint32_t rgb)
@@ -72,7 +72,7 @@ ActorInImage projectBox(const GroundBox& box, const Eigen::Isometry3d& world_fro
 {
   const Eigen::Isometry3d projection_from_world = world_from_projection.inverse();
   std::array<Eigen::Vector3d, 8> corners = orientedBoxCorners(
-      Eigen::Vector3d(box.pose.x, box.pose.y, 0.0), box.pose.yaw, box.length, box.width, box.height);
+      Eigen::Vector3d(box.pose.x, box.pose.y, box.base_z), box.pose.yaw, box.length, box.width, box.height);
   for (Eigen::Vector3d& c : corners)
   {
     c = projection_from_world * c;
@@ -135,8 +135,12 @@ RenderedImage renderCamera(const SceneSnapshot& scene, const std::vector<std::ui
         const auto index = static_cast<std::size_t>(hit.object);
         color = toVec(index < colors_rgb.size() ? colors_rgb[index] : 0x2E5FA8U) * shade(hit.normal);
         const GroundBox& box = scene.actorBoxes()[index];
-        const double z = (centre + hit.range * direction).z();
-        if (z > kWindowFraction * box.height && std::abs(hit.normal.z()) < 0.5)
+        // A profile's windows are its own surfaces (opaque to the camera); a box is glass above
+        // kWindowFraction of its height.
+        const double z = (centre + hit.range * direction).z() - box.base_z;
+        if (box.shape != VehicleShape::kBox
+                ? hit.glass
+                : z > kWindowFraction * box.height && std::abs(hit.normal.z()) < 0.5)
         {
           color = 0.35 * color + cv::Vec3d(60.0, 45.0, 35.0);  // glass
         }

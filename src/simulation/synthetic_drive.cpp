@@ -2,11 +2,13 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,6 +27,9 @@ constexpr double kGravity = 9.81;
 constexpr double kDifferenceStepS = 0.05;  // central differences for accelerations and yaw rates
 constexpr double kMaxLabelDepthM = 80.0;   // KITTI labels objects up to about this depth
 constexpr double kScanHalfPeriodS = 0.05;  // a 10 Hz revolution around the scan stamp
+constexpr double kHalfWheelbaseM = 1.35;   // the ego's wheels on a profiled ground (egoImuPose())
+constexpr double kHalfTrackM = 0.8;
+constexpr std::uint32_t kInsStream = 0x494E53;  // "INS": the INS error's own random stream
 const char* const kCameraName = "image_02";
 const char* const kCalibrationFiles[] = {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt",
                                          "calib_imu_to_velo.txt"};
@@ -93,18 +98,47 @@ Eigen::Isometry3d groundPose(const Pose2D& pose, double z)
   return iso;
 }
 
-/// OXTS record of the ego IMU at time t: inverse Mercator around the origin, velocities,
-/// accelerations and rates by central differences.
-OxtsRecord oxtsAt(const Trajectory& ego, double t, double imu_height, const SyntheticDriveOptions& o)
+bool flatGround(const GroundSurface& ground)
 {
+  return !ground.profiled() && ground.slope_x == 0.0 && ground.height == 0.0;
+}
+
+/// OXTS record of the ego IMU at time t: inverse Mercator around the origin, velocities,
+/// accelerations and rates by central differences; on a ground that is not flat the IMU's height,
+/// roll and pitch where it stands (egoImuPose()); plus the INS's `error` when the scenario has one.
+OxtsRecord oxtsAt(const SyntheticScenario& scenario, double t, double imu_height,
+                  const SyntheticDriveOptions& o, const InsErrorSample& error)
+{
+  const Trajectory& ego = scenario.ego;
   const double scale = mercatorScale(o.origin_lat_deg);
   const double mx0 = scale * kEarthRadiusM * o.origin_lon_deg * M_PI / 180.0;
   const double my0 = scale * kEarthRadiusM * std::log(std::tan((90.0 + o.origin_lat_deg) * M_PI / 360.0));
-  const Pose2D pose = ego.poseAt(t);
+  Pose2D pose = ego.poseAt(t);
+  double height = imu_height, roll = 0.0, pitch = 0.0;
+  if (!flatGround(scenario.ground))
+  {
+    const Eigen::Isometry3d imu = egoImuPose(scenario.ground, pose, imu_height);
+    pose.x = imu.translation().x();
+    pose.y = imu.translation().y();
+    height = imu.translation().z();
+    roll = std::atan2(imu.linear()(2, 1), imu.linear()(2, 2));
+    pitch = -std::asin(std::clamp(imu.linear()(2, 0), -1.0, 1.0));
+  }
+  if (scenario.ins_error.enabled())
+  {
+    pose.x += error.east;
+    pose.y += error.north;
+    pose.yaw = wrapAngle(pose.yaw + error.yaw);
+    height += error.up;
+    roll += error.roll;
+    pitch += error.pitch;
+  }
   OxtsRecord r;
   r.lon = (mx0 + pose.x) * 180.0 / (M_PI * kEarthRadiusM * scale);
   r.lat = 360.0 / M_PI * std::atan(std::exp((my0 + pose.y) / (kEarthRadiusM * scale))) - 90.0;
-  r.alt = o.origin_alt_m + imu_height;
+  r.alt = o.origin_alt_m + height;
+  r.roll = roll;
+  r.pitch = pitch;
   r.yaw = pose.yaw;
   const Eigen::Vector2d v = ego.velocityAt(t);
   const Eigen::Vector2d heading(std::cos(pose.yaw), std::sin(pose.yaw));
@@ -145,7 +179,7 @@ void writeOxtsLine(std::ofstream& out, const OxtsRecord& r)
 std::string labelLine(const Actor& actor, const GroundBox& box, const ActorInImage& image,
                       const Eigen::Isometry3d& rect_from_world)
 {
-  const Eigen::Vector3d location = rect_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
+  const Eigen::Vector3d location = rect_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, box.base_z);
   const Eigen::Vector3d direction =
       rect_from_world.linear() * Eigen::Vector3d(std::cos(box.pose.yaw), std::sin(box.pose.yaw), 0.0);
   const double ry = wrapAngle(std::atan2(-direction.z(), direction.x()));
@@ -329,34 +363,44 @@ SyntheticScenario recordedDriveScenario(const std::string& drive_dir, const Kitt
     actor.active_from = actor_times.front();
     actor.active_until = actor_times.back();
     actor.color_rgb = kPalette[k % (sizeof(kPalette) / sizeof(kPalette[0]))];
+    actor.shape = base.vehicle_profiles ? profileForType(actor.type) : VehicleShape::kBox;
+    actor.glass_transmission = base.glass_transmission;
     scenario.actors.push_back(actor);
   }
   scenario.validate();
   return scenario;
 }
 
-SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
-                                          const SyntheticDriveOptions& options,
-                                          const std::function<void(int, int)>& progress)
+namespace
 {
-  scenario.validate();
-  options.validate();
-  const KittiRawCalibration calibration = KittiRawCalibration::readDirectory(options.calibration_dir);
+/// Where a drive's files go (inside the temporary drive folder) and what every frame needs of
+/// the sensor set-up.
+struct DriveLayout
+{
+  fs::path drive_dir, image_dir, velo_dir, oxts_dir, label_dir;
+  // Sensor placement: the velodyne `lidar_height_m` above the road, the IMU where the day's
+  // calibration puts it relative to the velodyne, the rectified camera-0 frame from the
+  // velodyne through R_rect_00 · Tr_velo_to_cam.
+  Eigen::Isometry3d imu_from_velo, velo_from_rect;
+  double imu_height = 0.0;  ///< of the IMU above the ground [m]
+  SyntheticCameraModel camera;
+  std::vector<std::uint32_t> actor_colors, scenery_colors;
+};
 
-  std::ostringstream drive_name;
-  drive_name << options.date << "_drive_" << std::setw(4) << std::setfill('0') << options.drive_number
-             << "_sync";
-  const fs::path day_dir = fs::path(options.output_root) / options.date;
-  // The drive is written into <drive>.tmp and moved in place when complete: a failure leaves
-  // neither a partial drive nor the temporary behind, and a drive already there untouched.
-  TemporaryOutput output((day_dir / drive_name.str()).string());
-  const fs::path drive_dir = output.temporary();
-  const fs::path image_dir = drive_dir / kCameraName / "data";
-  const fs::path velo_dir = drive_dir / "velodyne_points" / "data";
-  const fs::path oxts_dir = drive_dir / "oxts" / "data";
-  const fs::path label_dir = drive_dir / "label_2";
+/// Creates the drive's folders, copies the day's calibration files next to it and sets up the
+/// sensors. @throws std::runtime_error naming a folder or file that cannot be written.
+DriveLayout prepareDrive(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
+                         const KittiRawCalibration& calibration, const fs::path& day_dir,
+                         const fs::path& drive_dir)
+{
+  DriveLayout layout;
+  layout.drive_dir = drive_dir;
+  layout.image_dir = drive_dir / kCameraName / "data";
+  layout.velo_dir = drive_dir / "velodyne_points" / "data";
+  layout.oxts_dir = drive_dir / "oxts" / "data";
+  layout.label_dir = drive_dir / "label_2";
   std::error_code error;
-  for (const fs::path& dir : {image_dir, velo_dir, oxts_dir, label_dir})
+  for (const fs::path& dir : {layout.image_dir, layout.velo_dir, layout.oxts_dir, layout.label_dir})
   {
     fs::create_directories(dir, error);
     if (error)
@@ -374,46 +418,250 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
                                day_dir.string() + ": " + error.message());
     }
   }
-
-  // Sensor placement: the velodyne `lidar_height_m` above the road, the IMU where the day's
-  // calibration puts it relative to the velodyne, the rectified camera-0 frame from the
-  // velodyne through R_rect_00 · Tr_velo_to_cam.
-  const Eigen::Isometry3d imu_from_velo = calibration.velo_from_imu.inverse();
-  const double imu_height = options.lidar_height_m - imu_from_velo.translation().z();
-  const Eigen::Isometry3d velo_from_rect = calibration.rectifiedFromVelo().inverse();
-  SyntheticCameraModel camera;
-  camera.projection = calibration.p_rect[2];
-  camera.width = static_cast<int>(calibration.image_size[2][0]);
-  camera.height = static_cast<int>(calibration.image_size[2][1]);
-  std::vector<std::uint32_t> actor_colors, scenery_colors;
+  layout.imu_from_velo = calibration.velo_from_imu.inverse();
+  layout.imu_height = options.lidar_height_m - layout.imu_from_velo.translation().z();
+  layout.velo_from_rect = calibration.rectifiedFromVelo().inverse();
+  layout.camera.projection = calibration.p_rect[2];
+  layout.camera.width = static_cast<int>(calibration.image_size[2][0]);
+  layout.camera.height = static_cast<int>(calibration.image_size[2][1]);
   for (const auto& actor : scenario.actors)
   {
-    actor_colors.push_back(actor.color_rgb);
+    layout.actor_colors.push_back(actor.color_rgb);
   }
   for (const auto& box : scenario.scenery)
   {
-    scenery_colors.push_back(box.color_rgb);
+    layout.scenery_colors.push_back(box.color_rgb);
   }
+  return layout;
+}
+
+/// The time stamp files of a drive, written frame by frame.
+struct StampFiles
+{
+  explicit StampFiles(const fs::path& drive_dir)
+      : paths{drive_dir / kCameraName / "timestamps.txt", drive_dir / "velodyne_points" / "timestamps.txt",
+              drive_dir / "velodyne_points" / "timestamps_start.txt",
+              drive_dir / "velodyne_points" / "timestamps_end.txt", drive_dir / "oxts" / "timestamps.txt"}
+  {
+    for (std::size_t i = 0; i < kCount; ++i)
+    {
+      files[i] = openForWriting(paths[i]);
+    }
+  }
+  /// The stamps of the frame at `t` [s] after `start`.
+  void add(const KittiStamp& start, double t, double oxts_delay)
+  {
+    const KittiStamp stamp = addSeconds(start, t);
+    files[0] << formatStamp(stamp) << '\n';
+    files[1] << formatStamp(stamp) << '\n';
+    files[2] << formatStamp(addSeconds(start, t - kScanHalfPeriodS)) << '\n';
+    files[3] << formatStamp(addSeconds(start, t + kScanHalfPeriodS)) << '\n';
+    files[4] << formatStamp(addSeconds(start, t + oxts_delay)) << '\n';
+  }
+  void close()
+  {
+    for (std::size_t i = 0; i < kCount; ++i)
+    {
+      closeChecked(files[i], paths[i]);
+    }
+  }
+
+  static constexpr std::size_t kCount = 5;  ///< image, scan, scan start, scan end, OXTS
+  fs::path paths[kCount];
+  std::ofstream files[kCount];
+};
+
+/// The lidar scan of one frame to velodyne_points/data. Returns its number of points.
+std::size_t writeScan(const SceneSnapshot& scene, const Eigen::Isometry3d& world_from_velo,
+                      const LidarConfig& lidar, std::mt19937& rng, const fs::path& path)
+{
+  const std::vector<LidarPoint> scan = simulateLidarScan(scene, world_from_velo, lidar, rng);
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(scan.data()),
+            static_cast<std::streamsize>(scan.size() * sizeof(LidarPoint)));
+  closeChecked(out, path);
+  return scan.size();
+}
+
+/// The label_2 file of one frame (the actors in the image up to kMaxLabelDepthM) and the
+/// frame's tracklet samples of the active actors. Returns the number of label lines.
+std::size_t writeLabels(const SyntheticScenario& scenario, const SceneSnapshot& scene,
+                        const RenderedImage& image, const Eigen::Isometry3d& world_from_velo,
+                        const Eigen::Isometry3d& rect_from_world, int frame, const fs::path& label_path,
+                        std::vector<TrackletTrack>& tracklets)
+{
+  const Eigen::Isometry3d velo_from_world = world_from_velo.inverse();
+  std::ofstream labels = openForWriting(label_path);
+  std::size_t lines = 0;
+  for (std::size_t a = 0; a < scenario.actors.size(); ++a)
+  {
+    const GroundBox& box = scene.actorBoxes()[a];
+    const ActorInImage& seen = image.actors[a];
+    const Eigen::Vector3d bottom(box.pose.x, box.pose.y, box.base_z);
+    const Eigen::Vector3d centre = rect_from_world * bottom;
+    if (seen.in_view && seen.silhouette_pixels > 0 && centre.z() > 0.0 && centre.z() <= kMaxLabelDepthM)
+    {
+      labels << labelLine(scenario.actors[a], box, seen, rect_from_world);
+      ++lines;
+    }
+    if (!scene.actorActive(a))
+    {
+      continue;
+    }
+    TrackletSample sample;
+    sample.bottom_centre_velo = velo_from_world * bottom;
+    const Eigen::Vector3d heading =
+        velo_from_world.linear() * Eigen::Vector3d(std::cos(box.pose.yaw), std::sin(box.pose.yaw), 0.0);
+    sample.yaw_velo = std::atan2(heading.y(), heading.x());
+    sample.occlusion = std::min(seen.occlusionLevel(), 2);
+    sample.truncation = !seen.in_view ? 2 : seen.truncation > 0.05 ? 1 : 0;
+    if (tracklets[a].first_frame < 0)
+    {
+      tracklets[a].first_frame = frame;
+    }
+    tracklets[a].samples.push_back(sample);
+  }
+  closeChecked(labels, label_path);
+  return lines;
+}
+
+/// Scan, image, labels and OXTS record of one frame; the tracklet samples to `tracklets`.
+void writeFrame(const SyntheticScenario& scenario, const SyntheticDriveOptions& options,
+                const DriveLayout& layout, int frame, const InsErrorSample& ins_error, std::mt19937& rng,
+                std::vector<TrackletTrack>& tracklets, SyntheticDriveSummary& summary)
+{
+  const double t = scenario.frameTime(frame);
+  const Eigen::Isometry3d world_from_imu =
+      egoImuPose(scenario.ground, scenario.ego.poseAt(t), layout.imu_height);
+  const Eigen::Isometry3d world_from_velo = world_from_imu * layout.imu_from_velo;
+  const Eigen::Isometry3d world_from_rect = world_from_velo * layout.velo_from_rect;
+  const Eigen::Isometry3d rect_from_world = world_from_rect.inverse();
+  SceneSnapshot scene(scenario.actors, scenario.scenery, t, scenario.ground);
+  scene.cullBeyond(world_from_velo.translation().head<2>(),
+                   std::max(scenario.lidar.max_range, layout.camera.far_m));
+
+  summary.lidar_points +=
+      writeScan(scene, world_from_velo, scenario.lidar, rng, layout.velo_dir / indexName(frame, ".bin"));
+
+  const RenderedImage image = renderCamera(scene, layout.actor_colors, layout.scenery_colors, world_from_rect,
+                                           layout.camera, scenario.road);
+  const fs::path image_path = layout.image_dir / indexName(frame, ".png");
+  if (!cv::imwrite(image_path.string(), image.bgr))
+  {
+    throw std::runtime_error("cannot write " + image_path.string());
+  }
+  summary.labels += writeLabels(scenario, scene, image, world_from_velo, rect_from_world, frame,
+                                layout.label_dir / indexName(frame, ".txt"), tracklets);
+
+  const fs::path path = layout.oxts_dir / indexName(frame, ".txt");
+  std::ofstream out = openForWriting(path);
+  writeOxtsLine(out, oxtsAt(scenario, t + scenario.oxts_delay_s, layout.imu_height, options, ins_error));
+  closeChecked(out, path);
+}
+}  // namespace
+
+std::vector<InsErrorSample> sampleInsErrors(const InsError& model, std::uint32_t seed,
+                                            const std::vector<double>& times)
+{
+  std::vector<InsErrorSample> errors(times.size());
+  if (!model.enabled())
+  {
+    return errors;
+  }
+  std::seed_seq seeds{seed, kInsStream};
+  std::mt19937 rng(seeds);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  double east = 0.0, north = 0.0, walk = 0.0;
+  for (std::size_t k = 0; k < times.size(); ++k)
+  {
+    // Six draws per record, whatever is enabled: the stream of one error does not depend on the others.
+    double draws[6];
+    for (double& draw : draws)
+    {
+      draw = normal(rng);
+    }
+    const double dt = k == 0 ? 0.0 : times[k] - times[k - 1];
+    const double keep =
+        k > 0 && model.position_correlation_s > 0.0 ? std::exp(-dt / model.position_correlation_s) : 0.0;
+    const double fresh = std::sqrt(1.0 - keep * keep) * model.position_std;
+    east = keep * east + fresh * draws[0];
+    north = keep * north + fresh * draws[1];
+    walk += model.yaw_walk_std * std::sqrt(dt) * draws[3];
+    errors[k] = {east,
+                 north,
+                 model.height_std * draws[2],
+                 model.yaw_drift_rate * times[k] + walk,
+                 model.roll_std * draws[4],
+                 model.pitch_std * draws[5]};
+  }
+  return errors;
+}
+
+Eigen::Isometry3d egoImuPose(const GroundSurface& ground, const Pose2D& pose, double imu_height)
+{
+  if (flatGround(ground))
+  {
+    return groundPose(pose, imu_height);
+  }
+  const Eigen::Vector2d at(pose.x, pose.y);
+  const Eigen::Vector2d forward(std::cos(pose.yaw), std::sin(pose.yaw));
+  const Eigen::Vector2d left(-forward.y(), forward.x());
+  const auto wheel = [&](double along, double across)
+  {
+    const Eigen::Vector2d p = at + along * forward + across * left;
+    return ground.z(p.x(), p.y());
+  };
+  const double front_left = wheel(kHalfWheelbaseM, kHalfTrackM);
+  const double front_right = wheel(kHalfWheelbaseM, -kHalfTrackM);
+  const double rear_left = wheel(-kHalfWheelbaseM, kHalfTrackM);
+  const double rear_right = wheel(-kHalfWheelbaseM, -kHalfTrackM);
+  const double roll = std::atan2(front_left + rear_left - front_right - rear_right, 4.0 * kHalfTrackM);
+  const double pitch = std::atan2(rear_left + rear_right - front_left - front_right, 4.0 * kHalfWheelbaseM);
+  Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
+  iso.linear() =
+      (Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  const double z = (front_left + front_right + rear_left + rear_right) / 4.0;
+  iso.translation() =
+      Eigen::Vector3d(pose.x, pose.y, z) + iso.linear() * Eigen::Vector3d(0.0, 0.0, imu_height);
+  return iso;
+}
+
+SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
+                                          const SyntheticDriveOptions& options,
+                                          const std::function<void(int, int)>& progress)
+{
+  scenario.validate();
+  options.validate();
+  const KittiRawCalibration calibration = KittiRawCalibration::readDirectory(options.calibration_dir);
+
+  std::ostringstream drive_name;
+  drive_name << options.date << "_drive_" << std::setw(4) << std::setfill('0') << options.drive_number
+             << "_sync";
+  const fs::path day_dir = fs::path(options.output_root) / options.date;
+  // The drive is written into <drive>.tmp and moved in place when complete: a failure leaves
+  // neither a partial drive nor the temporary behind, and a drive already there untouched.
+  TemporaryOutput output((day_dir / drive_name.str()).string());
+  const DriveLayout layout = prepareDrive(scenario, options, calibration, day_dir, output.temporary());
 
   const int frames =
       options.max_frames >= 0 ? std::min(options.max_frames, scenario.frameCount()) : scenario.frameCount();
   const KittiStamp start = parseKittiStamp(options.start_time, "start_time");
-  const fs::path image_stamps_path = drive_dir / kCameraName / "timestamps.txt";
-  const fs::path velo_stamps_path = drive_dir / "velodyne_points" / "timestamps.txt";
-  const fs::path velo_start_path = drive_dir / "velodyne_points" / "timestamps_start.txt";
-  const fs::path velo_end_path = drive_dir / "velodyne_points" / "timestamps_end.txt";
-  const fs::path oxts_stamps_path = drive_dir / "oxts" / "timestamps.txt";
-  std::ofstream image_stamps = openForWriting(image_stamps_path);
-  std::ofstream velo_stamps = openForWriting(velo_stamps_path);
-  std::ofstream velo_start = openForWriting(velo_start_path);
-  std::ofstream velo_end = openForWriting(velo_end_path);
-  std::ofstream oxts_stamps = openForWriting(oxts_stamps_path);
+  StampFiles stamps(layout.drive_dir);
   {
-    const fs::path path = drive_dir / "oxts" / "dataformat.txt";
+    const fs::path path = layout.drive_dir / "oxts" / "dataformat.txt";
     std::ofstream format = openForWriting(path);
     format << oxtsDataFormat();
     closeChecked(format, path);
   }
+  std::vector<double> oxts_times;
+  for (int frame = 0; frame < frames; ++frame)
+  {
+    oxts_times.push_back(scenario.frameTime(frame) + scenario.oxts_delay_s);
+  }
+  const std::vector<InsErrorSample> ins_errors =
+      sampleInsErrors(scenario.ins_error, scenario.seed, oxts_times);
 
   std::mt19937 rng(scenario.seed);
   SyntheticDriveSummary summary;
@@ -422,90 +670,16 @@ SyntheticDriveSummary writeSyntheticDrive(const SyntheticScenario& scenario,
   std::vector<TrackletTrack> tracklets(scenario.actors.size());
   for (int frame = 0; frame < frames; ++frame)
   {
-    const double t = scenario.frameTime(frame);
-    const Eigen::Isometry3d world_from_imu = groundPose(scenario.ego.poseAt(t), imu_height);
-    const Eigen::Isometry3d world_from_velo = world_from_imu * imu_from_velo;
-    const Eigen::Isometry3d world_from_rect = world_from_velo * velo_from_rect;
-    const Eigen::Isometry3d velo_from_world = world_from_velo.inverse();
-    const Eigen::Isometry3d rect_from_world = world_from_rect.inverse();
-    SceneSnapshot scene(scenario.actors, scenario.scenery, t);
-    scene.cullBeyond(world_from_velo.translation().head<2>(),
-                     std::max(scenario.lidar.max_range, camera.far_m));
-
-    // Lidar scan.
-    const std::vector<LidarPoint> scan = simulateLidarScan(scene, world_from_velo, scenario.lidar, rng);
-    {
-      const fs::path path = velo_dir / indexName(frame, ".bin");
-      std::ofstream out(path, std::ios::binary);
-      out.write(reinterpret_cast<const char*>(scan.data()),
-                static_cast<std::streamsize>(scan.size() * sizeof(LidarPoint)));
-      closeChecked(out, path);
-      summary.lidar_points += scan.size();
-    }
-
-    // Camera image and labels.
-    const RenderedImage image =
-        renderCamera(scene, actor_colors, scenery_colors, world_from_rect, camera, scenario.road);
-    const fs::path image_path = image_dir / indexName(frame, ".png");
-    if (!cv::imwrite(image_path.string(), image.bgr))
-    {
-      throw std::runtime_error("cannot write " + image_path.string());
-    }
-    const fs::path label_path = label_dir / indexName(frame, ".txt");
-    std::ofstream labels = openForWriting(label_path);
-    for (std::size_t a = 0; a < scenario.actors.size(); ++a)
-    {
-      const GroundBox& box = scene.actorBoxes()[a];
-      const ActorInImage& seen = image.actors[a];
-      const Eigen::Vector3d centre = rect_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
-      if (seen.in_view && seen.silhouette_pixels > 0 && centre.z() > 0.0 && centre.z() <= kMaxLabelDepthM)
-      {
-        labels << labelLine(scenario.actors[a], box, seen, rect_from_world);
-        ++summary.labels;
-      }
-      if (!scene.actorActive(a))
-      {
-        continue;
-      }
-      TrackletSample sample;
-      sample.bottom_centre_velo = velo_from_world * Eigen::Vector3d(box.pose.x, box.pose.y, 0.0);
-      const Eigen::Vector3d heading =
-          velo_from_world.linear() * Eigen::Vector3d(std::cos(box.pose.yaw), std::sin(box.pose.yaw), 0.0);
-      sample.yaw_velo = std::atan2(heading.y(), heading.x());
-      sample.occlusion = std::min(seen.occlusionLevel(), 2);
-      sample.truncation = !seen.in_view ? 2 : seen.truncation > 0.05 ? 1 : 0;
-      if (tracklets[a].first_frame < 0)
-      {
-        tracklets[a].first_frame = frame;
-      }
-      tracklets[a].samples.push_back(sample);
-    }
-    closeChecked(labels, label_path);
-
-    // OXTS and time stamps.
-    {
-      const fs::path path = oxts_dir / indexName(frame, ".txt");
-      std::ofstream out = openForWriting(path);
-      writeOxtsLine(out, oxtsAt(scenario.ego, t + scenario.oxts_delay_s, imu_height, options));
-      closeChecked(out, path);
-    }
-    const KittiStamp stamp = addSeconds(start, t);
-    image_stamps << formatStamp(stamp) << '\n';
-    velo_stamps << formatStamp(stamp) << '\n';
-    velo_start << formatStamp(addSeconds(start, t - kScanHalfPeriodS)) << '\n';
-    velo_end << formatStamp(addSeconds(start, t + kScanHalfPeriodS)) << '\n';
-    oxts_stamps << formatStamp(addSeconds(start, t + scenario.oxts_delay_s)) << '\n';
+    writeFrame(scenario, options, layout, frame, ins_errors[static_cast<std::size_t>(frame)], rng, tracklets,
+               summary);
+    stamps.add(start, scenario.frameTime(frame), scenario.oxts_delay_s);
     if (progress)
     {
       progress(frame + 1, frames);
     }
   }
-  closeChecked(image_stamps, image_stamps_path);
-  closeChecked(velo_stamps, velo_stamps_path);
-  closeChecked(velo_start, velo_start_path);
-  closeChecked(velo_end, velo_end_path);
-  closeChecked(oxts_stamps, oxts_stamps_path);
-  writeTracklets(drive_dir / "tracklet_labels.xml", scenario.actors, tracklets);
+  stamps.close();
+  writeTracklets(layout.drive_dir / "tracklet_labels.xml", scenario.actors, tracklets);
   output.commit();
   return summary;
 }

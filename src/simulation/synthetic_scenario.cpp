@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -127,6 +128,106 @@ std::uint32_t colorOr(const YAML::Node& node, const std::string& where, std::uin
   }
 }
 
+/// Throws when `node` has a key outside `known` (a misspelt key would otherwise be ignored).
+void rejectUnknownKeys(const YAML::Node& node, const std::vector<std::string>& known,
+                       const std::string& where)
+{
+  if (!node.IsMap())
+  {
+    throw std::runtime_error(where + ": expected a mapping");
+  }
+  for (const auto& entry : node)
+  {
+    const std::string key = entry.first.as<std::string>();
+    if (std::find(known.begin(), known.end(), key) == known.end())
+    {
+      std::string list;
+      for (const std::string& k : known)
+      {
+        list += (list.empty() ? "" : ", ") + k;
+      }
+      throw std::runtime_error(where + ": unknown key '" + key + "' (known: " + list + ")");
+    }
+  }
+}
+
+VehicleShape parseShape(const YAML::Node& node, const std::string& key, const std::string& where,
+                        bool van_allowed)
+{
+  const std::string name = get<std::string>(node, key, where);
+  for (VehicleShape shape : {VehicleShape::kBox, VehicleShape::kCar, VehicleShape::kVan})
+  {
+    if (name == vehicleShapeName(shape) && (van_allowed || shape != VehicleShape::kVan))
+    {
+      return shape;
+    }
+  }
+  throw std::runtime_error(where + ": " + key + " \"" + name + "\" is not one of " +
+                           (van_allowed ? "box, car, van" : "box, car"));
+}
+
+void parseGround(const YAML::Node& node, const std::string& where, GroundSurface& ground)
+{
+  rejectUnknownKeys(
+      node, {"slope", "camber", "kerb_height", "verge_rise_left", "verge_rise_right", "verge_width"}, where);
+  getOptional(node, "slope", where, ground.slope_x);
+  getOptional(node, "camber", where, ground.camber);
+  getOptional(node, "kerb_height", where, ground.kerb_height);
+  getOptional(node, "verge_rise_left", where, ground.verge_rise_left);
+  getOptional(node, "verge_rise_right", where, ground.verge_rise_right);
+  getOptional(node, "verge_width", where, ground.verge_width);
+}
+
+void parseInsError(const YAML::Node& node, const std::string& where, InsError& error)
+{
+  rejectUnknownKeys(node,
+                    {"position_std", "position_correlation", "height_std", "yaw_drift_rate", "yaw_walk_std",
+                     "roll_std", "pitch_std"},
+                    where);
+  getOptional(node, "position_std", where, error.position_std);
+  getOptional(node, "position_correlation", where, error.position_correlation_s);
+  getOptional(node, "height_std", where, error.height_std);
+  getOptional(node, "yaw_drift_rate", where, error.yaw_drift_rate);
+  getOptional(node, "yaw_walk_std", where, error.yaw_walk_std);
+  getOptional(node, "roll_std", where, error.roll_std);
+  getOptional(node, "pitch_std", where, error.pitch_std);
+}
+
+/// The world's settings: road, ground, vehicle shapes, INS error, lidar.
+void parseSettings(const YAML::Node& root, const std::string& path, SyntheticScenario& scenario)
+{
+  if (const YAML::Node road = root["road"])
+  {
+    getOptional(road, "center_y", path + ": road", scenario.road.center_y);
+    getOptional(road, "half_width", path + ": road", scenario.road.half_width);
+    getOptional(road, "lane_width", path + ": road", scenario.road.lane_width);
+  }
+  scenario.ground.center_y = scenario.road.center_y;
+  scenario.ground.half_width = scenario.road.half_width;
+  if (const YAML::Node ground = root["ground"])
+  {
+    parseGround(ground, path + ": ground", scenario.ground);
+  }
+  if (root["vehicle_shape"])
+  {
+    scenario.vehicle_profiles = parseShape(root, "vehicle_shape", path, false) == VehicleShape::kCar;
+  }
+  getOptional(root, "glass_transmission", path, scenario.glass_transmission);
+  if (const YAML::Node ins = root["ins_error"])
+  {
+    parseInsError(ins, path + ": ins_error", scenario.ins_error);
+  }
+  if (const YAML::Node lidar = root["lidar"])
+  {
+    const std::string where = path + ": lidar";
+    getOptional(lidar, "azimuth_steps", where, scenario.lidar.azimuth_steps);
+    getOptional(lidar, "range_noise_std", where, scenario.lidar.range_noise_std);
+    getOptional(lidar, "dropout", where, scenario.lidar.dropout);
+    getOptional(lidar, "min_range", where, scenario.lidar.min_range);
+    getOptional(lidar, "max_range", where, scenario.lidar.max_range);
+  }
+}
+
 void parseSize(const YAML::Node& node, const std::string& where, double& length, double& width,
                double& height)
 {
@@ -140,6 +241,37 @@ void parseSize(const YAML::Node& node, const std::string& where, double& length,
   height = size[2];
 }
 }  // namespace
+
+bool InsError::enabled() const
+{
+  return position_std != 0.0 || height_std != 0.0 || yaw_drift_rate != 0.0 || yaw_walk_std != 0.0 ||
+         roll_std != 0.0 || pitch_std != 0.0;
+}
+
+void InsError::validate() const
+{
+  const std::pair<const char*, double> non_negative[] = {
+      {"position_std", position_std}, {"position_correlation", position_correlation_s},
+      {"height_std", height_std},     {"yaw_walk_std", yaw_walk_std},
+      {"roll_std", roll_std},         {"pitch_std", pitch_std}};
+  for (const auto& [name, value] : non_negative)
+  {
+    if (!(value >= 0.0))
+    {
+      throw std::invalid_argument(std::string("ins_error: ") + name + " must be >= 0, got " +
+                                  std::to_string(value));
+    }
+  }
+  if (!std::isfinite(yaw_drift_rate))
+  {
+    throw std::invalid_argument("ins_error: yaw_drift_rate must be finite");
+  }
+}
+
+VehicleShape profileForType(const std::string& type)
+{
+  return type == "Car" ? VehicleShape::kCar : type == "Van" ? VehicleShape::kVan : VehicleShape::kBox;
+}
 
 int SyntheticScenario::frameCount() const
 {
@@ -166,6 +298,27 @@ void SyntheticScenario::validate() const
                                 std::to_string(oxts_delay_s) + " s");
   }
   lidar.validate();
+  try
+  {
+    ground.validate();
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw std::invalid_argument(std::string("ground: ") + e.what());
+  }
+  ins_error.validate();
+  if (!(glass_transmission >= 0.0 && glass_transmission <= 1.0))
+  {
+    throw std::invalid_argument("glass_transmission must be in [0, 1], got " +
+                                std::to_string(glass_transmission));
+  }
+  for (std::size_t i = 0; i < actors.size(); ++i)
+  {
+    if (!(actors[i].glass_transmission >= 0.0 && actors[i].glass_transmission <= 1.0))
+    {
+      throw std::invalid_argument("actors[" + std::to_string(i) + "]: glass_transmission must be in [0, 1]");
+    }
+  }
 }
 
 std::uint32_t parseColor(const std::string& text)
@@ -206,21 +359,7 @@ SyntheticScenario parseScenario(const std::string& yaml, const std::string& path
   getOptional(root, "duration", path, scenario.duration_s);
   getOptional(root, "frame_rate", path, scenario.frame_rate_hz);
   getOptional(root, "oxts_delay", path, scenario.oxts_delay_s);
-  if (const YAML::Node road = root["road"])
-  {
-    getOptional(road, "center_y", path + ": road", scenario.road.center_y);
-    getOptional(road, "half_width", path + ": road", scenario.road.half_width);
-    getOptional(road, "lane_width", path + ": road", scenario.road.lane_width);
-  }
-  if (const YAML::Node lidar = root["lidar"])
-  {
-    const std::string where = path + ": lidar";
-    getOptional(lidar, "azimuth_steps", where, scenario.lidar.azimuth_steps);
-    getOptional(lidar, "range_noise_std", where, scenario.lidar.range_noise_std);
-    getOptional(lidar, "dropout", where, scenario.lidar.dropout);
-    getOptional(lidar, "min_range", where, scenario.lidar.min_range);
-    getOptional(lidar, "max_range", where, scenario.lidar.max_range);
-  }
+  parseSettings(root, path, scenario);
   if (!root["ego"])
   {
     throw std::runtime_error(path + ": missing key 'ego'");
@@ -235,6 +374,10 @@ SyntheticScenario parseScenario(const std::string& yaml, const std::string& path
     parseSize(node, where, actor.length, actor.width, actor.height);
     actor.trajectory = parseMotion(node, where);
     actor.color_rgb = colorOr(node, where, actor.color_rgb);
+    actor.shape = node["shape"]               ? parseShape(node, "shape", where, true)
+                  : scenario.vehicle_profiles ? profileForType(actor.type)
+                                              : VehicleShape::kBox;
+    actor.glass_transmission = scenario.glass_transmission;
     scenario.actors.push_back(actor);
   }
   index = 0;

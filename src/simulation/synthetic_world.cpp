@@ -37,7 +37,272 @@ bool mayHit(const Eigen::Vector3d& centre, double radius, const Eigen::Vector3d&
   }
   return oc.squaredNorm() - along * along <= radius * radius;
 }
+
+// --- Vehicle profiles --------------------------------------------------------------------------
+
+using Face = VehicleBody::Face;
+using Part = VehicleBody::Part;
+constexpr double kGolden = 0.6180339887498949;  // spreads one glass draw over the actors of a ray
+
+/// The face through (a_along, a_z) and (b_along, b_z) of the plane spanned by `axis` (x or y) and
+/// z, its normal on the side of `outward`.
+Face faceThrough(int axis, double a_along, double a_z, double b_along, double b_z,
+                 const Eigen::Vector3d& outward, bool glass = false)
+{
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  normal[axis] = -(b_z - a_z);
+  normal.z() = b_along - a_along;
+  if (normal.dot(outward) < 0.0)
+  {
+    normal = -normal;
+  }
+  normal.normalize();
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  point[axis] = a_along;
+  point.z() = a_z;
+  Face face;
+  face.normal = normal;
+  face.offset = normal.dot(point);
+  face.glass = glass;
+  return face;
+}
+
+/// The horizontal faces of a part from z0 to z1 [m].
+void addFloorAndTop(Part& part, double z0, double z1)
+{
+  part.push_back({-Eigen::Vector3d::UnitZ(), -z0});
+  part.push_back({Eigen::Vector3d::UnitZ(), z1});
+}
+
+/// Sides at |y| = half_bottom at z0 leaning in to |y| = half_top at z1.
+void addSides(Part& part, double half_bottom, double half_top, double z0, double z1, bool glass,
+              double glass_from_x = -1e9)
+{
+  for (double side : {1.0, -1.0})
+  {
+    Face face =
+        faceThrough(1, side * half_bottom, z0, side * half_top, z1, Eigen::Vector3d(0.0, side, 0.0), glass);
+    face.glass_from_x = glass_from_x;
+    part.push_back(face);
+  }
+}
+
+/// Vertical faces tangent to quarter arcs of `radius` [m] in the two corners at x = end (sign
+/// +1: the front, −1: the rear) of a body of half width `half` [m]: the arc approximated by its
+/// tangents at 30° and 60° between the end face and the sides.
+void addRoundedCorners(Part& part, double end, double sign, double half, double radius)
+{
+  if (radius <= 0.0)
+  {
+    return;
+  }
+  for (double side : {1.0, -1.0})
+  {
+    const Eigen::Vector3d centre(end - sign * radius, side * (half - radius), 0.0);
+    for (double angle : {M_PI / 6.0, M_PI / 3.0})
+    {
+      const Eigen::Vector3d normal(sign * std::cos(angle), side * std::sin(angle), 0.0);
+      part.push_back({normal, normal.dot(centre) + radius});
+    }
+  }
+}
+
+/// A car: the lower body to the belt line at 0.6 h, its bonnet falling from the windscreen's base
+/// to 0.46 h at the front and its boot to 0.52 h at the rear, plan corners rounded (0.22 w front,
+/// 0.18 w rear); the cabin above it 0.1 w narrower at the belt and 0.3 w at the roof, from the
+/// rear window's base 0.1 l ahead of the rear to the windscreen's base 0.27 l behind the front,
+/// the windscreen and the rear window raked over 0.18 l and 0.14 l.
+void carProfile(double l, double w, double h, Part& lower, Part& upper)
+{
+  const double front = l / 2.0, rear = -l / 2.0, belt = 0.6 * h;
+  const double screen_base = front - 0.27 * l, screen_top = screen_base - 0.18 * l;
+  const double rear_base = rear + 0.10 * l, rear_top = rear_base + 0.14 * l;
+  addFloorAndTop(lower, 0.0, belt);
+  lower.push_back({Eigen::Vector3d::UnitX(), front});
+  lower.push_back({-Eigen::Vector3d::UnitX(), -rear});
+  addSides(lower, w / 2.0, w / 2.0, 0.0, belt, false);
+  lower.push_back(faceThrough(0, front, 0.46 * h, screen_base, belt, Eigen::Vector3d(1.0, 0.0, 1.0)));
+  lower.push_back(faceThrough(0, rear, 0.52 * h, rear_base, belt, Eigen::Vector3d(-1.0, 0.0, 1.0)));
+  addRoundedCorners(lower, front, 1.0, w / 2.0, 0.22 * w);
+  addRoundedCorners(lower, rear, -1.0, w / 2.0, 0.18 * w);
+
+  addFloorAndTop(upper, belt, h);
+  upper.push_back(faceThrough(0, screen_base, belt, screen_top, h, Eigen::Vector3d::UnitX(), true));
+  upper.push_back(faceThrough(0, rear_base, belt, rear_top, h, -Eigen::Vector3d::UnitX(), true));
+  addSides(upper, 0.45 * w, 0.35 * w, belt, h, true);
+}
+
+/// A van: the lower body to the bonnet line at 0.45 h, the bonnet falling to 0.38 h at the front
+/// from the windscreen's base 0.16 l behind it, plan corners rounded (0.2 w front, 0.05 w rear);
+/// the upper body from there to the rear at full height, 0.04 w narrower at the bonnet line and
+/// 0.12 w at the roof, the windscreen raked over 0.14 l, side windows in the cab (the 0.16 l behind
+/// the windscreen's top).
+void vanProfile(double l, double w, double h, Part& lower, Part& upper)
+{
+  const double front = l / 2.0, rear = -l / 2.0, belt = 0.45 * h;
+  const double screen_base = front - 0.16 * l, screen_top = screen_base - 0.14 * l;
+  addFloorAndTop(lower, 0.0, belt);
+  lower.push_back({Eigen::Vector3d::UnitX(), front});
+  lower.push_back({-Eigen::Vector3d::UnitX(), -rear});
+  addSides(lower, w / 2.0, w / 2.0, 0.0, belt, false);
+  lower.push_back(faceThrough(0, front, 0.38 * h, screen_base, belt, Eigen::Vector3d(1.0, 0.0, 1.0)));
+  addRoundedCorners(lower, front, 1.0, w / 2.0, 0.2 * w);
+  addRoundedCorners(lower, rear, -1.0, w / 2.0, 0.05 * w);
+
+  addFloorAndTop(upper, belt, h);
+  upper.push_back(faceThrough(0, screen_base, belt, screen_top, h, Eigen::Vector3d::UnitX(), true));
+  upper.push_back({-Eigen::Vector3d::UnitX(), -rear});
+  addSides(upper, 0.48 * w, 0.44 * w, belt, h, true, screen_top - 0.16 * l);
+}
+
+/// Where a ray (box frame) is inside a convex part: it enters through face `in` at t_in and
+/// leaves through face `out` at t_out.
+struct Crossing
+{
+  double t_in = -std::numeric_limits<double>::infinity();
+  double t_out = std::numeric_limits<double>::infinity();
+  int in = -1;
+  int out = -1;
+  bool hit() const { return in >= 0 && out >= 0 && t_in <= t_out; }
+};
+
+Crossing clip(const Part& part, const Eigen::Vector3d& o, const Eigen::Vector3d& d)
+{
+  Crossing c;
+  for (std::size_t k = 0; k < part.size(); ++k)
+  {
+    const double along = part[k].normal.dot(d);
+    const double gap = part[k].offset - part[k].normal.dot(o);  // >= 0 on the inner side
+    if (std::abs(along) < 1e-12)
+    {
+      if (gap < 0.0)
+      {
+        return {};
+      }
+      continue;
+    }
+    const double t = gap / along;
+    if (along < 0.0 && t > c.t_in)
+    {
+      c.t_in = t;
+      c.in = static_cast<int>(k);
+    }
+    else if (along > 0.0 && t < c.t_out)
+    {
+      c.t_out = t;
+      c.out = static_cast<int>(k);
+    }
+  }
+  return c;
+}
+
+bool isGlass(const Face& face, const Eigen::Vector3d& point)
+{
+  return face.glass && point.x() >= face.glass_from_x;
+}
+
+/// The surface that stops a ray crossing the part `c` (box frame): its entry face, or where a
+/// window lets the beam through (draw < transmission), the face it leaves through, unless that is
+/// a window too and lets it through again. A range of infinity: it passed.
+RayHit firstStop(const Part& part, const Crossing& c, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                 double draw, double transmission)
+{
+  RayHit hit;
+  const Face& in = part[static_cast<std::size_t>(c.in)];
+  hit.glass = isGlass(in, o + c.t_in * d);
+  if (!hit.glass || !(draw < transmission))
+  {
+    hit.range = c.t_in;
+    hit.normal = in.normal;
+    return hit;
+  }
+  const double inside = draw / transmission;  // uniform in [0, 1) again, given that it passed
+  const Face& out = part[static_cast<std::size_t>(c.out)];
+  hit.glass = isGlass(out, o + c.t_out * d);
+  if (hit.glass && inside < transmission)
+  {
+    return RayHit{};
+  }
+  hit.range = c.t_out;
+  hit.normal = -out.normal;  // the far window or the interior, seen from inside
+  return hit;
+}
+
+/// A world ray in the frame of `box` (x forward from its centre, y left, z up from its bottom).
+void toBoxFrame(const GroundBox& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                Eigen::Vector3d& o, Eigen::Vector3d& d)
+{
+  const double c = std::cos(box.pose.yaw);
+  const double s = std::sin(box.pose.yaw);
+  const Eigen::Vector3d rel = origin - Eigen::Vector3d(box.pose.x, box.pose.y, box.base_z);
+  o = Eigen::Vector3d(c * rel.x() + s * rel.y(), -s * rel.x() + c * rel.y(), rel.z());
+  d = Eigen::Vector3d(c * direction.x() + s * direction.y(), -s * direction.x() + c * direction.y(),
+                      direction.z());
+}
+
+// --- Ground ------------------------------------------------------------------------------------
+
+/// One plane strip of a profiled ground: z = plane(x) + c0 + c1 · (y − center_y) for
+/// lo <= y − center_y <= hi.
+struct GroundStrip
+{
+  double lo, hi, c0, c1;
+};
+
+/// Nearest hit of the ray with one strip (from above) within (min_range, best.range].
+void castStrip(const GroundSurface& g, const GroundStrip& strip, const Eigen::Vector3d& o,
+               const Eigen::Vector3d& d, double min_range, RayHit& best)
+{
+  const double denominator = d.z() - g.slope_x * d.x() - strip.c1 * d.y();
+  if (!(denominator < -1e-12))
+  {
+    return;
+  }
+  const double t =
+      (g.height + g.slope_x * o.x() + strip.c0 + strip.c1 * (o.y() - g.center_y) - o.z()) / denominator;
+  const double lateral = o.y() + t * d.y() - g.center_y;
+  if (t > min_range && t <= best.range && lateral >= strip.lo - 1e-9 && lateral <= strip.hi + 1e-9)
+  {
+    best.range = t;
+    best.object = RayHit::kGround;
+    best.normal = Eigen::Vector3d(-g.slope_x, -strip.c1, 1.0).normalized();
+  }
+}
+
+/// Nearest hit of the ray with the kerb's face at y − center_y = side · half_width (seen from
+/// the road) within (min_range, best.range].
+void castKerb(const GroundSurface& g, double side, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+              double min_range, RayHit& best)
+{
+  if (g.kerb_height <= 0.0 || !(side * d.y() > 1e-12))
+  {
+    return;
+  }
+  const double t = (g.center_y + side * g.half_width - o.y()) / d.y();
+  const Eigen::Vector3d p = o + t * d;
+  const double edge = g.z(p.x()) - g.camber * g.half_width;
+  if (t > min_range && t <= best.range && p.z() >= edge && p.z() <= edge + g.kerb_height)
+  {
+    best.range = t;
+    best.object = RayHit::kGround;
+    best.normal = Eigen::Vector3d(0.0, -side, 0.0);
+  }
+}
 }  // namespace
+
+const char* vehicleShapeName(VehicleShape shape)
+{
+  switch (shape)
+  {
+    case VehicleShape::kCar:
+      return "car";
+    case VehicleShape::kVan:
+      return "van";
+    case VehicleShape::kBox:
+      break;
+  }
+  return "box";
+}
 
 Trajectory Trajectory::waypoints(const std::vector<Eigen::Vector3d>& t_x_y, double initial_yaw)
 {
@@ -199,6 +464,8 @@ GroundBox Actor::boxAt(double t) const
   box.length = length;
   box.width = width;
   box.height = height;
+  box.shape = shape;
+  box.glass_transmission = glass_transmission;
   return box;
 }
 
@@ -258,21 +525,180 @@ RayHit intersectBox(const GroundBox& box, const Eigen::Vector3d& origin, const E
   return hit;
 }
 
+VehicleBody::VehicleBody(VehicleShape shape, double length, double width, double height)
+{
+  if (shape == VehicleShape::kCar)
+  {
+    carProfile(length, width, height, lower_, upper_);
+  }
+  else if (shape == VehicleShape::kVan)
+  {
+    vanProfile(length, width, height, lower_, upper_);
+  }
+  else
+  {
+    throw std::invalid_argument("VehicleBody: a box has no profile (use intersectBox)");
+  }
+}
+
+RayHit VehicleBody::intersect(const GroundBox& box, const Eigen::Vector3d& origin,
+                              const Eigen::Vector3d& direction, double min_range, double glass_draw,
+                              double transmission) const
+{
+  Eigen::Vector3d o, d;
+  toBoxFrame(box, origin, direction, o, d);
+  RayHit best;
+  const Crossing lower = clip(lower_, o, d);
+  if (lower.hit() && lower.t_in > min_range)
+  {
+    best.range = lower.t_in;
+    best.normal = lower_[static_cast<std::size_t>(lower.in)].normal;
+  }
+  const Crossing upper = clip(upper_, o, d);
+  if (upper.hit() && upper.t_in > min_range && upper.t_in < best.range)
+  {
+    const RayHit stop = firstStop(upper_, upper, o, d, glass_draw, transmission);
+    if (stop.range < best.range)
+    {
+      best = stop;
+    }
+  }
+  if (!std::isfinite(best.range))
+  {
+    return {};
+  }
+  best.object = 0;
+  const double c = std::cos(box.pose.yaw);
+  const double s = std::sin(box.pose.yaw);
+  const Eigen::Vector3d n = best.normal;
+  best.normal = Eigen::Vector3d(c * n.x() - s * n.y(), s * n.x() + c * n.y(), n.z());
+  return best;
+}
+
+bool VehicleBody::crosses(const GroundBox& box, const Eigen::Vector3d& origin,
+                          const Eigen::Vector3d& direction, double min_range, double max_range) const
+{
+  Eigen::Vector3d o, d;
+  toBoxFrame(box, origin, direction, o, d);
+  for (const Part* part : {&lower_, &upper_})
+  {
+    const Crossing c = clip(*part, o, d);
+    if (c.hit() && c.t_in > min_range && c.t_in <= max_range)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+RayHit intersectShape(const GroundBox& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                      double min_range, double glass_draw)
+{
+  if (box.shape == VehicleShape::kBox)
+  {
+    return intersectBox(box, origin, direction, min_range);
+  }
+  return VehicleBody(box.shape, box.length, box.width, box.height)
+      .intersect(box, origin, direction, min_range, glass_draw, box.glass_transmission);
+}
+
+bool GroundSurface::profiled() const
+{
+  return camber != 0.0 || kerb_height != 0.0 || verge_rise_left != 0.0 || verge_rise_right != 0.0;
+}
+
+double GroundSurface::z(double x, double y) const
+{
+  const double plane = height + slope_x * x;
+  if (!profiled())
+  {
+    return plane;
+  }
+  const double lateral = y - center_y;
+  const double off = std::abs(lateral);
+  if (off <= half_width)
+  {
+    return plane - camber * off;
+  }
+  const double rise = lateral > 0.0 ? verge_rise_left : verge_rise_right;
+  return plane - camber * half_width + kerb_height + rise * std::min(1.0, (off - half_width) / verge_width);
+}
+
+RayHit GroundSurface::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double min_range,
+                           double max_range) const
+{
+  RayHit best;
+  best.range = max_range;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double hw = half_width, vw = verge_width, edge = kerb_height - camber * hw;
+  const GroundStrip strips[] = {
+      {-inf, -hw - vw, edge + verge_rise_right, 0.0},
+      {-hw - vw, -hw, edge - verge_rise_right * hw / vw, -verge_rise_right / vw},
+      {-hw, 0.0, 0.0, camber},
+      {0.0, hw, 0.0, -camber},
+      {hw, hw + vw, edge - verge_rise_left * hw / vw, verge_rise_left / vw},
+      {hw + vw, inf, edge + verge_rise_left, 0.0},
+  };
+  for (const GroundStrip& strip : strips)
+  {
+    castStrip(*this, strip, origin, direction, min_range, best);
+  }
+  castKerb(*this, 1.0, origin, direction, min_range, best);
+  castKerb(*this, -1.0, origin, direction, min_range, best);
+  if (!best.hit())
+  {
+    return {};
+  }
+  return best;
+}
+
+void GroundSurface::validate() const
+{
+  if (!(half_width > 0.0))
+  {
+    throw std::invalid_argument("half_width must be > 0");
+  }
+  if (!(camber >= 0.0 && kerb_height >= 0.0 && verge_rise_left >= 0.0 && verge_rise_right >= 0.0))
+  {
+    throw std::invalid_argument("camber, kerb_height and the verge rises must be >= 0");
+  }
+  if (!(verge_width > 0.0))
+  {
+    throw std::invalid_argument("verge_width must be > 0");
+  }
+}
+
 SceneSnapshot::SceneSnapshot(const std::vector<Actor>& actors, const std::vector<SceneryBox>& scenery,
-                             double t, const GroundPlane& ground)
+                             double t, const GroundSurface& ground)
     : ground_(ground)
 {
   for (const auto& actor : actors)
   {
     actor_boxes_.push_back(actor.boxAt(t));
-    actor_boxes_.back().base_z = ground_.z(actor_boxes_.back().pose.x);
+    GroundBox& box = actor_boxes_.back();
+    box.base_z = ground_.z(box.pose.x, box.pose.y);
     actor_active_.push_back(actor.activeAt(t));
-    bound_radius_.push_back(boundingSphere(actor_boxes_.back()).radius);
+    bound_radius_.push_back(boundingSphere(box).radius);
+    actor_body_.push_back(-1);
+    if (box.shape != VehicleShape::kBox)
+    {
+      actor_body_.back() = static_cast<int>(bodies_.size());
+      bodies_.emplace_back(box.shape, box.length, box.width, box.height);
+      has_glass_ = true;
+    }
   }
   for (const auto& item : scenery)
   {
     scenery_boxes_.push_back(item.box);
-    bound_radius_.push_back(boundingSphere(item.box).radius);
+    // Standing on the lowest ground under its footprint (a building on a verge or a slope).
+    GroundBox& box = scenery_boxes_.back();
+    double lowest = ground_.z(box.pose.x, box.pose.y);
+    for (const Eigen::Vector3d& corner : box.corners())
+    {
+      lowest = std::min(lowest, ground_.z(corner.x(), corner.y()));
+    }
+    box.base_z += lowest;
+    bound_radius_.push_back(boundingSphere(box).radius);
   }
   culled_.assign(bound_radius_.size(), false);
 }
@@ -287,21 +713,46 @@ void SceneSnapshot::cullBeyond(const Eigen::Vector2d& centre, double radius)
   }
 }
 
+RayHit SceneSnapshot::castActor(std::size_t i, const Eigen::Vector3d& origin,
+                                const Eigen::Vector3d& direction, double min_range, double glass_draw) const
+{
+  const GroundBox& box = actor_boxes_[i];
+  if (actor_body_[i] < 0)
+  {
+    return intersectBox(box, origin, direction, min_range);
+  }
+  double draw = glass_draw;
+  if (draw < 1.0)
+  {
+    draw += kGolden * static_cast<double>(i);
+    draw -= std::floor(draw);
+  }
+  return bodies_[static_cast<std::size_t>(actor_body_[i])].intersect(box, origin, direction, min_range, draw,
+                                                                     box.glass_transmission);
+}
+
 RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double min_range,
-                           double max_range) const
+                           double max_range, double glass_draw) const
 {
   RayHit best;
-  // Ground plane n · p = height with n = (−slope_x, 0, 1).
-  const Eigen::Vector3d n(-ground_.slope_x, 0.0, 1.0);
-  const double nd = n.dot(direction);
-  if (nd < -1e-12)
+  if (ground_.profiled())
   {
-    const double t = (ground_.height - n.dot(origin)) / nd;
-    if (t > min_range && t <= max_range)
+    best = ground_.cast(origin, direction, min_range, max_range);
+  }
+  else
+  {
+    // Ground plane n · p = height with n = (−slope_x, 0, 1).
+    const Eigen::Vector3d n(-ground_.slope_x, 0.0, 1.0);
+    const double nd = n.dot(direction);
+    if (nd < -1e-12)
     {
-      best.range = t;
-      best.object = RayHit::kGround;
-      best.normal = n.normalized();
+      const double t = (ground_.height - n.dot(origin)) / nd;
+      if (t > min_range && t <= max_range)
+      {
+        best.range = t;
+        best.object = RayHit::kGround;
+        best.normal = n.normalized();
+      }
     }
   }
   const std::size_t actors = actor_boxes_.size();
@@ -317,7 +768,8 @@ RayHit SceneSnapshot::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d&
     {
       continue;
     }
-    RayHit hit = intersectBox(box, origin, direction, min_range);
+    RayHit hit = i < actors ? castActor(i, origin, direction, min_range, glass_draw)
+                            : intersectBox(box, origin, direction, min_range);
     if (hit.range < best.range && hit.range <= max_range)
     {
       hit.object = i < actors ? static_cast<int>(i) : RayHit::kSceneryBase + static_cast<int>(i - actors);
@@ -332,10 +784,17 @@ void SceneSnapshot::actorsAlong(const Eigen::Vector3d& origin, const Eigen::Vect
 {
   for (std::size_t i = 0; i < actor_boxes_.size(); ++i)
   {
-    if (actor_active_[i] && !culled_[i] &&
-        mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range,
-               max_range) &&
-        intersectBox(actor_boxes_[i], origin, direction, min_range).range <= max_range)
+    if (!actor_active_[i] || culled_[i] ||
+        !mayHit(boundingSphere(actor_boxes_[i]).centre, bound_radius_[i], origin, direction, min_range,
+                max_range))
+    {
+      continue;
+    }
+    const bool crosses = actor_body_[i] < 0
+                             ? intersectBox(actor_boxes_[i], origin, direction, min_range).range <= max_range
+                             : bodies_[static_cast<std::size_t>(actor_body_[i])].crosses(
+                                   actor_boxes_[i], origin, direction, min_range, max_range);
+    if (crosses)
     {
       actors.push_back(static_cast<int>(i));
     }
@@ -386,6 +845,7 @@ std::vector<LidarPoint> simulateLidarScan(const SceneSnapshot& scene, const Eige
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const Eigen::Matrix3d rotation = sensor_pose.linear();
   const Eigen::Vector3d origin = sensor_pose.translation();
+  const bool glass = scene.hasGlass();
   std::vector<LidarPoint> points;
   points.reserve(static_cast<std::size_t>(config.azimuth_steps) * elevations.size());
   for (int a = 0; a < config.azimuth_steps; ++a)
@@ -397,8 +857,10 @@ std::vector<LidarPoint> simulateLidarScan(const SceneSnapshot& scene, const Eige
     {
       const Eigen::Vector3d local(std::cos(elevation) * ca, std::cos(elevation) * sa, std::sin(elevation));
       const Eigen::Vector3d direction = rotation * local;
-      const RayHit hit = scene.cast(origin, direction, config.min_range, config.max_range);
-      // Draw both random numbers for every ray so that the stream does not depend on the hits.
+      // Draw every random number for every ray so that the stream does not depend on the hits
+      // (the glass draw only where the scene has windows: other scenes' streams stay as they were).
+      const double glass_draw = glass ? uniform(rng) : 1.0;
+      const RayHit hit = scene.cast(origin, direction, config.min_range, config.max_range, glass_draw);
       const double drop = uniform(rng);
       const double range_noise = config.range_noise_std > 0.0 ? noise(rng) : 0.0;
       if (!hit.hit() || drop < config.dropout)

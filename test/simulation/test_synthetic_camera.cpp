@@ -1,4 +1,5 @@
-// Tests of the synthetic camera: projection of boxes, depth order, truncation and occlusion.
+// Tests of the synthetic camera: projection of boxes, depth order, truncation, occlusion and the
+// shapes of vehicle profiles.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -96,6 +97,39 @@ TEST(SyntheticCamera, DepthOrderAndOcclusion)
   {
     cv::imwrite(dump, image.bgr);
   }
+}
+
+TEST(SyntheticCamera, SeesTheVehicleProfileTheLidarSees)
+{
+  // A car profile 10 m ahead, seen from behind on a cambered road: fewer pixels than its box
+  // (the boot, the cabin narrower than the body, the rounded corners), windows drawn as glass;
+  // its label box is the box's, and every pixel the camera gives the car is one where the
+  // profile's ray cast hits the car.
+  GroundSurface ground;
+  ground.camber = 0.03;
+  Actor profile = car(10.0, 0.0);
+  profile.shape = VehicleShape::kCar;
+  const SceneSnapshot boxes({car(10.0, 0.0)}, {}, 0.0, ground);
+  const SceneSnapshot profiles({profile}, {}, 0.0, ground);
+  const RenderedImage box_image = renderCamera(boxes, {0xC02020}, {}, worldFromCamera(), camera());
+  const RenderedImage image = renderCamera(profiles, {0xC02020}, {}, worldFromCamera(), camera());
+  const int box_pixels = box_image.actors[0].visible_pixels;
+  const int pixels = image.actors[0].visible_pixels;
+  EXPECT_LT(pixels, 0.9 * box_pixels);
+  EXPECT_GT(pixels, 0.6 * box_pixels);
+  EXPECT_EQ(image.actors[0].silhouette_pixels, pixels) << "nothing hides it";
+  EXPECT_EQ(image.actors[0].box.x_min, box_image.actors[0].box.x_min);
+  EXPECT_EQ(image.actors[0].box.y_max, box_image.actors[0].box.y_max);
+  // The rear window (about 1.2 m high on the centre line: v = 120 + 400 · 0.45 / 8.7) is glass,
+  // bluer than the body below it (v = 120 + 400 · 1.24 / 8) in the car's red.
+  const cv::Vec3b window = image.bgr.at<cv::Vec3b>(142, 320);
+  const cv::Vec3b body = image.bgr.at<cv::Vec3b>(182, 320);
+  EXPECT_EQ(image.object_id.at<int>(142, 320), 0);
+  EXPECT_GT(window[0], body[0]);
+  EXPECT_GT(window[0] - window[2], body[0] - body[2]) << "bluer";
+  // The box's top corners are sky or ground for the profile.
+  EXPECT_EQ(box_image.object_id.at<int>(129, 278), 0);
+  EXPECT_EQ(image.object_id.at<int>(129, 278), -1);
 }
 
 }  // namespace grid_vision_fusion

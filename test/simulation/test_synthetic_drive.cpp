@@ -6,8 +6,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
 
 #include "grid_vision_fusion/detection/kitti_labels.h"
 #include "grid_vision_fusion/kitti/kitti_raw.h"
@@ -287,6 +291,245 @@ TEST(SyntheticDrive, BadOptionsAreNamed)
   options.drive_number = 1;
   options.start_time = "yesterday";
   EXPECT_THROW(options.validate(), std::runtime_error);
+}
+
+namespace
+{
+std::string readText(const fs::path& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// smallScenario() written to TempDir()/`name` with `change` applied first.
+fs::path writeVariant(const std::string& name, const std::function<void(SyntheticScenario&)>& change)
+{
+  SyntheticScenario scenario = smallScenario();
+  change(scenario);
+  SyntheticDriveOptions options;
+  options.output_root = (fs::path(testing::TempDir()) / name).string();
+  options.calibration_dir = kCalibration;
+  fs::remove_all(options.output_root);
+  return writeSyntheticDrive(scenario, options).drive_dir;
+}
+
+/// The file name of frame i without its extension, as the drive writes it.
+std::string frameName(std::size_t i)
+{
+  char name[16];
+  std::snprintf(name, sizeof(name), "%010zu", i);
+  return name;
+}
+
+std::vector<float> readScan(const fs::path& path)
+{
+  const std::string bytes = readText(path);
+  std::vector<float> values(bytes.size() / sizeof(float));
+  std::memcpy(values.data(), bytes.data(), values.size() * sizeof(float));
+  return values;
+}
+}  // namespace
+
+TEST(SyntheticDrive, TheDefaultDriveIsWhatItWasBeforeTheRealismKeys)
+{
+  // Frame 0 of the default drive, written by the code before vehicle profiles, INS errors and
+  // the ground's height field existed (commit d2f6139; Debian 12, GCC 12, -O3): its scan's point
+  // count and coordinate sums, its OXTS record and its labels. Off by default, none of them may
+  // change the drive.
+  const SyntheticScenario scenario =
+      loadScenario(std::string(GVF_SOURCE_DIR) + "/config/synthetic_drive.yaml");
+  SyntheticDriveOptions options;
+  options.output_root = (fs::path(testing::TempDir()) / "default_drive").string();
+  options.calibration_dir = std::string(GVF_SOURCE_DIR) + "/data/calibration/2011_09_26";
+  options.max_frames = 1;
+  fs::remove_all(options.output_root);
+  const fs::path dir = writeSyntheticDrive(scenario, options).drive_dir;
+  const std::vector<float> scan = readScan(dir / "velodyne_points/data/0000000000.bin");
+  ASSERT_EQ(scan.size(), 4U * 126228U);
+  double sums[4] = {0.0, 0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < scan.size(); ++i)
+  {
+    sums[i % 4] += scan[i];
+  }
+  EXPECT_NEAR(sums[0], 46237.99700242374, 1e-3);
+  EXPECT_NEAR(sums[1], 81882.77653489355, 1e-3);
+  EXPECT_NEAR(sums[2], -159899.14192336798, 1e-3);
+  EXPECT_NEAR(sums[3], 59469.302085671574, 1e-3);
+  EXPECT_EQ(
+      readText(dir / "oxts/data/0000000000.txt"),
+      "49.01098427948 8.4237 116.92727594172 0 0 0 0 9 9 0 0 90 0 9.81 90 0 9.81 0 0 0 0 0 0 0.05 0.02 4 10 "
+      "6 6 6\n");
+  EXPECT_EQ(readText(dir / "label_2/0000000000.txt"),
+            "Car 0.00 1 -1.68 663.56 182.79 720.80 224.08 1.50 1.80 4.30 3.16 1.91 28.90 -1.57\n"
+            "Car 0.00 1 -1.63 642.21 181.88 670.07 203.65 1.45 1.70 4.10 3.18 2.10 50.90 -1.57\n"
+            "Car 0.00 0 1.75 459.18 180.97 504.86 209.30 1.50 1.80 4.40 -7.23 1.97 40.91 1.57\n"
+            "Car 0.00 0 -1.55 560.16 184.10 638.39 250.82 1.50 1.80 4.50 -0.30 1.82 18.90 -1.57\n"
+            "Car 0.00 3 2.82 825.79 181.46 877.17 197.65 1.50 1.80 4.30 23.00 2.33 68.88 -3.14\n"
+            "Car 0.00 2 -1.95 628.40 180.73 665.34 198.49 1.50 1.80 4.30 3.20 2.21 63.90 -1.90\n"
+            "Cyclist 0.00 0 -1.65 653.80 176.73 693.43 271.20 1.70 0.60 1.80 1.15 1.78 13.90 -1.57\n");
+}
+
+TEST(SyntheticDrive, InsErrorsAreSeededAndSizedAsConfigured)
+{
+  std::vector<double> times;
+  for (int i = 0; i < 4000; ++i)
+  {
+    times.push_back(0.013 + 0.1 * i);
+  }
+  InsError model;
+  EXPECT_EQ(sampleInsErrors(model, 1, times)[100].east, 0.0) << "disabled: exact";
+  model.position_std = 0.02;
+  model.yaw_drift_rate = 0.0028;
+  model.roll_std = 0.001;
+  const std::vector<InsErrorSample> a = sampleInsErrors(model, 1117, times);
+  const std::vector<InsErrorSample> same = sampleInsErrors(model, 1117, times);
+  const std::vector<InsErrorSample> other = sampleInsErrors(model, 1118, times);
+  EXPECT_EQ(a[1234].north, same[1234].north);
+  EXPECT_NE(a[1234].north, other[1234].north);
+  double east2 = 0.0, north2 = 0.0, roll2 = 0.0, lag = 0.0;
+  for (std::size_t k = 0; k < times.size(); ++k)
+  {
+    east2 += a[k].east * a[k].east;
+    north2 += a[k].north * a[k].north;
+    roll2 += a[k].roll * a[k].roll;
+    lag += k > 0 ? a[k].east * a[k - 1].east : 0.0;
+    ASSERT_NEAR(a[k].yaw, 0.0028 * times[k], 1e-12) << "a constant drift, no walk";
+    ASSERT_EQ(a[k].up, 0.0);
+  }
+  const double n = static_cast<double>(times.size());
+  EXPECT_NEAR(std::sqrt(east2 / n), 0.02, 0.001);
+  EXPECT_NEAR(std::sqrt(north2 / n), 0.02, 0.001);
+  EXPECT_NEAR(std::sqrt(roll2 / n), 0.001, 0.00005);
+  EXPECT_NEAR(lag / east2, 0.0, 0.05) << "independent from record to record";
+  EXPECT_NEAR(a[50].yaw * 180.0 / M_PI, 0.8, 0.01) << "0.8 deg after 5 s";
+  // Correlated over 1 s: the same stationary std, consecutive records (0.1 s) correlate by e^-0.1.
+  model.position_correlation_s = 1.0;
+  model.yaw_drift_rate = 0.0;
+  model.yaw_walk_std = 0.002;
+  const std::vector<InsErrorSample> c = sampleInsErrors(model, 1117, times);
+  double c2 = 0.0, clag = 0.0, step2 = 0.0;
+  for (std::size_t k = 1; k < times.size(); ++k)
+  {
+    c2 += c[k].east * c[k].east;
+    clag += c[k].east * c[k - 1].east;
+    step2 += (c[k].yaw - c[k - 1].yaw) * (c[k].yaw - c[k - 1].yaw);
+  }
+  EXPECT_NEAR(std::sqrt(c2 / n), 0.02, 0.003);
+  EXPECT_NEAR(clag / c2, std::exp(-0.1), 0.02);
+  EXPECT_NEAR(std::sqrt(step2 / n), 0.002 * std::sqrt(0.1), 0.0001) << "random walk steps";
+  EXPECT_EQ(c[0].yaw, 0.0);
+}
+
+TEST(SyntheticDrive, AnInsErrorChangesTheOxtsOnly)
+{
+  const fs::path exact = drive().summary.drive_dir;
+  InsError model;
+  model.position_std = 0.03;
+  model.yaw_drift_rate = 0.01;
+  model.roll_std = 0.002;
+  const fs::path noisy =
+      writeVariant("synthetic_drive_ins", [&](SyntheticScenario& s) { s.ins_error = model; });
+  const std::vector<OxtsRecord> truth = readOxtsFolder((exact / "oxts").string());
+  const std::vector<OxtsRecord> reported = readOxtsFolder((noisy / "oxts").string());
+  const std::vector<InsErrorSample> errors = sampleInsErrors(model, smallScenario().seed, {0.0, 0.1, 0.2});
+  ASSERT_EQ(reported.size(), 3U);
+  const double scale = mercatorScale(truth[0].lat);
+  for (std::size_t i = 0; i < 3; ++i)
+  {
+    const std::string frame = frameName(i);
+    EXPECT_EQ(readText(exact / "velodyne_points/data" / (frame + ".bin")),
+              readText(noisy / "velodyne_points/data" / (frame + ".bin")))
+        << "the lidar sees the true pose";
+    EXPECT_EQ(readText(exact / "label_2" / (frame + ".txt")), readText(noisy / "label_2" / (frame + ".txt")));
+    const Eigen::Vector3d offset = oxtsToMercatorPose(reported[i], scale).translation() -
+                                   oxtsToMercatorPose(truth[i], scale).translation();
+    EXPECT_NEAR(offset.x(), errors[i].east, 1e-6);
+    EXPECT_NEAR(offset.y(), errors[i].north, 1e-6);
+    EXPECT_NEAR(reported[i].yaw - truth[i].yaw, 0.01 * 0.1 * static_cast<double>(i), 1e-12);
+    EXPECT_NEAR(reported[i].roll, errors[i].roll, 1e-12);
+  }
+  EXPECT_EQ(readText(exact / "tracklet_labels.xml"), readText(noisy / "tracklet_labels.xml"));
+}
+
+TEST(SyntheticDrive, TheEgoAndTheActorsStandOnACamberedRoad)
+{
+  // The ego at y = −1.75 on the right half of a road cambered by 3 %: it rolls left side up by
+  // atan(0.03); the parked car at y = −5 stands on the same plane, so in the velodyne frame its
+  // bottom is as far below the sensor as the ground under the ego (1.73 m); the road's left half,
+  // beyond the crown, lies lower in the scan.
+  const fs::path dir = writeVariant("synthetic_drive_camber",
+                                    [](SyntheticScenario& s)
+                                    {
+                                      s.ground.camber = 0.03;
+                                      s.ground.kerb_height = 0.15;
+                                      s.ground.verge_rise_right = 0.4;
+                                    });
+  const std::vector<OxtsRecord> records = readOxtsFolder((dir / "oxts").string());
+  EXPECT_NEAR(records[0].roll, std::atan(0.03), 1e-9);
+  EXPECT_NEAR(records[0].pitch, 0.0, 1e-12);
+  // The IMU 0.93 m above the ground's mean height under the wheels (−3 % · 1.75 m), tilted.
+  EXPECT_NEAR(records[0].alt - 116.0, -0.03 * 1.75 + (1.73 - 0.80) * std::cos(std::atan(0.03)), 0.02);
+  const std::vector<Tracklet> tracklets = readTracklets((dir / "tracklet_labels.xml").string());
+  EXPECT_NEAR(tracklets[0].poses[0].tz, -1.73, 0.05);
+  // Scan, against the flat world's (the velodyne is turned against the IMU by 0.85° in roll, so
+  // that flat ground is not level in its frame): the ground 4 m right of the sensor, on the
+  // ego's plane, where it was; 6 m left of it, 3.9 m beyond the crown, 2 · 3 % · 3.9 m lower.
+  const auto meanGroundZ = [](const fs::path& scan_path, double y_min, double y_max)
+  {
+    const std::vector<float> scan = readScan(scan_path);
+    double sum = 0.0;
+    int count = 0;
+    for (std::size_t i = 0; i + 3 < scan.size(); i += 4)
+    {
+      if (scan[i] > -3.0 && scan[i] < 3.0 && scan[i + 1] > y_min && scan[i + 1] < y_max)
+      {
+        sum += scan[i + 2];
+        ++count;
+      }
+    }
+    EXPECT_GT(count, 10);
+    return sum / std::max(count, 1);
+  };
+  const fs::path scan = dir / "velodyne_points/data/0000000000.bin";
+  const fs::path flat = fs::path(drive().summary.drive_dir) / "velodyne_points/data/0000000000.bin";
+  EXPECT_NEAR(meanGroundZ(scan, -4.2, -3.8) - meanGroundZ(flat, -4.2, -3.8), 0.0, 0.01);
+  EXPECT_NEAR(meanGroundZ(scan, 5.8, 6.2) - meanGroundZ(flat, 5.8, 6.2), -2.0 * 0.03 * 3.9, 0.02);
+}
+
+TEST(SyntheticDrive, VehicleProfilesKeepTheLabelBoxes)
+{
+  // The same drive with car and van profiles: the labels (class, size, place, heading, 2-D box)
+  // and the tracklets are the boxes', as before; the scan differs.
+  const fs::path boxes = drive().summary.drive_dir;
+  const fs::path profiles = writeVariant("synthetic_drive_profiles",
+                                         [](SyntheticScenario& s)
+                                         {
+                                           s.actors[0].shape = VehicleShape::kCar;
+                                           s.actors[1].shape = VehicleShape::kVan;
+                                         });
+  for (int frame = 0; frame < 3; ++frame)
+  {
+    const std::string name = frameName(static_cast<std::size_t>(frame)) + ".txt";
+    const std::vector<KittiObjectLabel> a = readKittiLabels((boxes / "label_2" / name).string());
+    const std::vector<KittiObjectLabel> b = readKittiLabels((profiles / "label_2" / name).string());
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i)
+    {
+      EXPECT_EQ(a[i].type, b[i].type);
+      EXPECT_EQ(a[i].left, b[i].left);
+      EXPECT_EQ(a[i].bottom, b[i].bottom);
+      EXPECT_EQ(a[i].length, b[i].length);
+      EXPECT_EQ(a[i].x, b[i].x);
+      EXPECT_EQ(a[i].z, b[i].z);
+      EXPECT_EQ(a[i].rotation_y, b[i].rotation_y);
+    }
+  }
+  const std::vector<Tracklet> a = readTracklets((boxes / "tracklet_labels.xml").string());
+  const std::vector<Tracklet> b = readTracklets((profiles / "tracklet_labels.xml").string());
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(a[0].poses[2].tx, b[0].poses[2].tx);
+  EXPECT_NE(readText(boxes / "velodyne_points/data/0000000000.bin"),
+            readText(profiles / "velodyne_points/data/0000000000.bin"));
 }
 
 }  // namespace grid_vision_fusion

@@ -99,4 +99,94 @@ TEST(SyntheticScenario, WaypointsWithYawKeepTheGivenHeading)
   EXPECT_NEAR(car.poseAt(9.0).x, 32.0, 1e-9);
 }
 
+TEST(SyntheticScenario, RealismKeysAreOffByDefault)
+{
+  const SyntheticScenario s = loadScenario(std::string(GVF_SOURCE_DIR) + "/config/synthetic_drive.yaml");
+  EXPECT_FALSE(s.ground.profiled());
+  EXPECT_EQ(s.ground.slope_x, 0.0);
+  EXPECT_FALSE(s.vehicle_profiles);
+  EXPECT_FALSE(s.ins_error.enabled());
+  for (const Actor& actor : s.actors)
+  {
+    EXPECT_EQ(actor.shape, VehicleShape::kBox);
+  }
+}
+
+TEST(SyntheticScenario, GroundVehicleShapeAndInsErrorKeys)
+{
+  const SyntheticScenario s = loadScenario(writeTemp(
+      "realism.yaml",
+      "road: {center_y: 0.5, half_width: 6.5}\n"
+      "ground: {slope: 0.004, camber: 0.03, kerb_height: 0.15, verge_rise_left: 0.1, verge_rise_right: 0.45,"
+      " verge_width: 2.5}\n"
+      "vehicle_shape: car\n"
+      "glass_transmission: 0.3\n"
+      "ins_error: {position_std: 0.02, position_correlation: 0.5, height_std: 0.01, yaw_drift_rate: 0.0028,"
+      " yaw_walk_std: 0.001, roll_std: 0.002, pitch_std: 0.003}\n"
+      "ego: {parked: {x: 0, y: 0}}\n"
+      "actors:\n"
+      "  - {type: Car, size: [4.3, 1.8, 1.5], parked: {x: 1, y: 2}}\n"
+      "  - {type: Van, size: [5, 2, 2.2], parked: {x: 1, y: 9}}\n"
+      "  - {type: Truck, size: [8, 2.5, 3.2], parked: {x: 1, y: 19}}\n"
+      "  - {type: Car, size: [4.3, 1.8, 1.5], shape: box, parked: {x: 1, y: 29}}\n"
+      "  - {type: Truck, size: [6, 2.2, 2.6], shape: van, parked: {x: 1, y: 39}}\n"));
+  EXPECT_DOUBLE_EQ(s.ground.slope_x, 0.004);
+  EXPECT_DOUBLE_EQ(s.ground.camber, 0.03);
+  EXPECT_DOUBLE_EQ(s.ground.kerb_height, 0.15);
+  EXPECT_DOUBLE_EQ(s.ground.verge_rise_left, 0.1);
+  EXPECT_DOUBLE_EQ(s.ground.verge_rise_right, 0.45);
+  EXPECT_DOUBLE_EQ(s.ground.verge_width, 2.5);
+  EXPECT_DOUBLE_EQ(s.ground.center_y, 0.5) << "the road's";
+  EXPECT_DOUBLE_EQ(s.ground.half_width, 6.5);
+  EXPECT_TRUE(s.vehicle_profiles);
+  ASSERT_EQ(s.actors.size(), 5U);
+  EXPECT_EQ(s.actors[0].shape, VehicleShape::kCar);
+  EXPECT_EQ(s.actors[1].shape, VehicleShape::kVan);
+  EXPECT_EQ(s.actors[2].shape, VehicleShape::kBox) << "trucks keep their box";
+  EXPECT_EQ(s.actors[3].shape, VehicleShape::kBox) << "given";
+  EXPECT_EQ(s.actors[4].shape, VehicleShape::kVan) << "given";
+  EXPECT_DOUBLE_EQ(s.actors[0].glass_transmission, 0.3);
+  EXPECT_DOUBLE_EQ(s.actors[0].boxAt(0.0).glass_transmission, 0.3);
+  EXPECT_EQ(s.actors[1].boxAt(0.0).shape, VehicleShape::kVan);
+  EXPECT_DOUBLE_EQ(s.ins_error.position_std, 0.02);
+  EXPECT_DOUBLE_EQ(s.ins_error.position_correlation_s, 0.5);
+  EXPECT_DOUBLE_EQ(s.ins_error.height_std, 0.01);
+  EXPECT_DOUBLE_EQ(s.ins_error.yaw_drift_rate, 0.0028);
+  EXPECT_DOUBLE_EQ(s.ins_error.yaw_walk_std, 0.001);
+  EXPECT_DOUBLE_EQ(s.ins_error.roll_std, 0.002);
+  EXPECT_DOUBLE_EQ(s.ins_error.pitch_std, 0.003);
+  EXPECT_TRUE(s.ins_error.enabled());
+}
+
+TEST(SyntheticScenario, RealismKeyErrorsNameTheEntry)
+{
+  const std::string ego = "ego: {parked: {x: 0, y: 0}}\n";
+  EXPECT_NE(errorOf(ego + "ground: {camber_percent: 2}\n")
+                .find("ground: unknown key 'camber_percent' (known: slope,"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "ground: {camber: -0.02}\n")
+                .find("ground: camber, kerb_height and the verge rises must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "ground: {verge_width: 0}\n").find("ground: verge_width must be > 0"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(ego + "ground: {kerb_height: high}\n").find("ground: key 'kerb_height' has the wrong type"),
+      std::string::npos);
+  EXPECT_NE(errorOf(ego + "ground: 0.1\n").find("ground: expected a mapping"), std::string::npos);
+  EXPECT_NE(errorOf(ego + "vehicle_shape: van\n").find("vehicle_shape \"van\" is not one of box, car"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "actors:\n  - {type: Car, size: [4, 2, 1.5], shape: bus, parked: {x: 1, y: 2}}\n")
+                .find("actors[0]: shape \"bus\" is not one of box, car, van"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "glass_transmission: 1.5\n").find("glass_transmission must be in [0, 1]"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "ins_error: {position_std: -0.01}\n").find("ins_error: position_std must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf(ego + "ins_error: {yaw_drift: 0.01}\n").find("ins_error: unknown key 'yaw_drift'"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(ego + "ins_error: {roll_std: [1]}\n").find("ins_error: key 'roll_std' has the wrong type"),
+      std::string::npos);
+}
+
 }  // namespace grid_vision_fusion

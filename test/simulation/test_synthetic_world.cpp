@@ -1,4 +1,5 @@
-// Tests of the synthetic world: trajectories, ray-box intersection and the simulated lidar.
+// Tests of the synthetic world: trajectories, ray-box intersection, vehicle profiles, the ground's
+// height field and the simulated lidar.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -172,6 +173,280 @@ TEST(Lidar, BoxAheadNoiseDropoutAndDeterminism)
   EXPECT_NEAR(kept, 0.98, 0.01);
   config.dropout = 1.0;
   EXPECT_THROW(simulateLidarScan(scene, pose, config, rng), std::invalid_argument);
+}
+
+namespace
+{
+/// A 4.3 × 1.8 × 1.5 m car profile at the origin, heading +x, on flat ground.
+GroundBox carAtOrigin(VehicleShape shape = VehicleShape::kCar)
+{
+  GroundBox box;
+  box.length = 4.3;
+  box.width = 1.8;
+  box.height = 1.5;
+  box.shape = shape;
+  box.glass_transmission = 0.5;
+  return box;
+}
+
+/// z of the first surface straight down at (x, y) from 5 m, or NaN when the ray misses.
+double topAt(const GroundBox& box, double x, double y)
+{
+  const RayHit hit = intersectShape(box, Eigen::Vector3d(x, y, 5.0), -Eigen::Vector3d::UnitZ());
+  return hit.hit() ? 5.0 - hit.range : std::nan("");
+}
+}  // namespace
+
+TEST(VehicleProfile, BonnetLowerThanTheCabinAndRoundedCorners)
+{
+  const GroundBox car = carAtOrigin();
+  // Downward rays along the centre line: the bonnet falls towards the front (0.46 h = 0.69 m at
+  // the nose, 0.6 h = 0.9 m at the windscreen's base 1.0 m behind it); the roof is the box's top.
+  const double nose = topAt(car, 2.1, 0.0);
+  const double bonnet = topAt(car, 1.2, 0.0);
+  const double roof = topAt(car, -0.3, 0.0);
+  EXPECT_NEAR(nose, 0.70, 0.02);
+  EXPECT_GT(bonnet, nose + 0.1);
+  EXPECT_LT(bonnet, 0.91);
+  EXPECT_NEAR(roof, 1.5, 1e-9);
+  // A horizontal ray from ahead at 0.8 m (bonnet height) misses the nose and hits the bonnet's
+  // rising surface or the windscreen further back; one at 0.5 m hits the front face.
+  const RayHit high = intersectShape(car, Eigen::Vector3d(10.0, 0.0, 0.8), -Eigen::Vector3d::UnitX());
+  const RayHit low = intersectShape(car, Eigen::Vector3d(10.0, 0.0, 0.5), -Eigen::Vector3d::UnitX());
+  EXPECT_NEAR(low.range, 10.0 - 2.15, 1e-9);
+  EXPECT_GT(high.range, low.range + 0.3);
+  // The cabin is narrower than the body, its sides lean in: 0.7 m off the centre line the side
+  // is at 1.27 m, 0.85 m off it the body's top beside the cabin at the belt line.
+  EXPECT_NEAR(topAt(car, -0.3, 0.7), 0.9 + 0.6 * 0.11 / 0.18, 1e-9);
+  EXPECT_NEAR(topAt(car, -0.3, 0.85), 0.9, 1e-9);
+  // Rounded corners: straight down at the box's corners the car is missed, the box is hit.
+  for (const double x : {2.1, -2.1})
+  {
+    for (const double y : {0.85, -0.85})
+    {
+      EXPECT_TRUE(std::isnan(topAt(car, x, y))) << x << ", " << y;
+      EXPECT_NEAR(topAt(carAtOrigin(VehicleShape::kBox), x, y), 1.5, 1e-9);
+    }
+  }
+  // A ray across the front-left corner at 45°, 0.11 m inside the box's corner: misses the car.
+  const Eigen::Vector3d across = Eigen::Vector3d(1.0, -1.0, 0.0).normalized();
+  const Eigen::Vector3d corner(2.15 - 0.08, 0.9 - 0.08, 0.4);
+  EXPECT_FALSE(intersectShape(car, corner - 5.0 * across, across).hit());
+  EXPECT_TRUE(intersectShape(carAtOrigin(VehicleShape::kBox), corner - 5.0 * across, across).hit());
+}
+
+TEST(VehicleProfile, WindowsPassAShareOfTheBeams)
+{
+  GroundBox car = carAtOrigin();
+  car.pose = {10.0, 5.0, 0.3};  // anywhere, turned
+  car.base_z = 0.2;
+  const Eigen::Vector3d side(-std::sin(0.3), std::cos(0.3), 0.0);
+  // A ray through the side windows (1.2 m above the bottom) from the right.
+  const Eigen::Vector3d origin = Eigen::Vector3d(10.0, 5.0, 1.4) - 6.0 * side;
+  const RayHit opaque = intersectShape(car, origin, side, 1e-6, 1.0);
+  ASSERT_TRUE(opaque.hit());
+  EXPECT_TRUE(opaque.glass);
+  EXPECT_NEAR(opaque.range, 6.0 - 0.9 + (0.9 - 0.81) + 0.3 * 0.25, 0.1) << "the near window";
+  EXPECT_NEAR(std::abs(opaque.normal.dot(side)), 0.6 / std::hypot(0.6, 0.18), 1e-9) << "leaning in";
+  // Draw 0.4 < 0.5: the near window passes it, 0.4 / 0.5 = 0.8 does not pass the far one.
+  const RayHit far = intersectShape(car, origin, side, 1e-6, 0.4);
+  ASSERT_TRUE(far.hit());
+  EXPECT_TRUE(far.glass);
+  EXPECT_NEAR(far.range - opaque.range, 2.0 * (6.0 - opaque.range) - 0.0, 0.2) << "the far window";
+  // Draw 0.1: both pass (a quarter of the beams).
+  EXPECT_FALSE(intersectShape(car, origin, side, 1e-6, 0.1).hit());
+  int through = 0, near_window = 0;
+  for (int i = 0; i < 1000; ++i)
+  {
+    const RayHit hit = intersectShape(car, origin, side, 1e-6, (i + 0.5) / 1000.0);
+    through += hit.hit() ? 0 : 1;
+    near_window += hit.hit() && std::abs(hit.range - opaque.range) < 1e-9 ? 1 : 0;
+  }
+  EXPECT_EQ(through, 250);
+  EXPECT_EQ(near_window, 500);
+  // The roof is not glass; neither is the body below the belt line.
+  const RayHit roof =
+      intersectShape(car, Eigen::Vector3d(10.0, 5.0, 5.0), -Eigen::Vector3d::UnitZ(), 1e-6, 0.0);
+  EXPECT_FALSE(roof.glass);
+  EXPECT_NEAR(roof.range, 5.0 - 1.7, 1e-9);
+  const RayHit door = intersectShape(car, origin - Eigen::Vector3d(0, 0, 0.8), side, 1e-6, 0.0);
+  EXPECT_FALSE(door.glass);
+  EXPECT_NEAR(door.range, 6.0 - 0.9, 1e-9);
+}
+
+TEST(VehicleProfile, AVanHasGlassInItsCabOnly)
+{
+  GroundBox van = carAtOrigin(VehicleShape::kVan);
+  van.length = 5.0;
+  van.width = 2.0;
+  van.height = 2.2;
+  // From the left at 1.7 m: the cab's side window ahead, the cargo body's panel behind.
+  const RayHit cab =
+      intersectShape(van, Eigen::Vector3d(1.2, 6.0, 1.7), -Eigen::Vector3d::UnitY(), 1e-6, 0.9);
+  const RayHit cargo =
+      intersectShape(van, Eigen::Vector3d(-1.0, 6.0, 1.7), -Eigen::Vector3d::UnitY(), 1e-6, 0.0);
+  EXPECT_TRUE(cab.glass);
+  EXPECT_FALSE(cargo.glass);
+  EXPECT_NEAR(cargo.range, 6.0 - (0.96 - 0.08 * 0.71 / 1.21), 1e-9);
+  EXPECT_NEAR(topAt(van, 0.0, 0.0), 2.2, 1e-9);
+  EXPECT_LT(topAt(van, 2.4, 0.0), 0.9) << "a short bonnet";
+}
+
+TEST(VehicleProfile, EveryHitLiesInTheLabelledBox)
+{
+  for (const VehicleShape shape : {VehicleShape::kCar, VehicleShape::kVan})
+  {
+    GroundBox box = carAtOrigin(shape);
+    box.pose = {3.0, -2.0, 1.0};
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    int hits = 0;
+    for (int i = 0; i < 2000; ++i)
+    {
+      const Eigen::Vector3d origin(3.0 + 8.0 * uniform(rng), -2.0 + 8.0 * uniform(rng),
+                                   2.5 + 0.9 * uniform(rng));
+      const Eigen::Vector3d target(3.0 + 2.5 * uniform(rng), -2.0 + 1.5 * uniform(rng),
+                                   0.75 + 0.8 * uniform(rng));
+      const Eigen::Vector3d direction = (target - origin).normalized();
+      const RayHit hit = intersectShape(box, origin, direction, 1e-6, 0.5 * (uniform(rng) + 1.0));
+      if (!hit.hit())
+      {
+        continue;
+      }
+      ++hits;
+      const RayHit outer = intersectBox(box, origin, direction);
+      ASSERT_TRUE(outer.hit());
+      ASSERT_GE(hit.range, outer.range - 1e-9);
+      const Eigen::Vector3d p = origin + hit.range * direction;
+      const Eigen::Vector2d local = Eigen::Rotation2Dd(-1.0) * Eigen::Vector2d(p.x() - 3.0, p.y() + 2.0);
+      ASSERT_LE(std::abs(local.x()), 4.3 / 2 + 1e-9);
+      ASSERT_LE(std::abs(local.y()), 1.8 / 2 + 1e-9);
+      ASSERT_GE(p.z(), -1e-9);
+      ASSERT_LE(p.z(), 1.5 + 1e-9);
+    }
+    EXPECT_GT(hits, 500) << vehicleShapeName(shape);
+  }
+}
+
+TEST(GroundSurface, CamberKerbsAndVerges)
+{
+  GroundSurface g;
+  g.slope_x = 0.01;
+  g.center_y = 1.0;
+  g.half_width = 6.0;
+  g.camber = 0.03;
+  g.kerb_height = 0.15;
+  g.verge_rise_left = 0.4;
+  g.verge_rise_right = 0.1;
+  g.verge_width = 2.0;
+  ASSERT_TRUE(g.profiled());
+  EXPECT_DOUBLE_EQ(g.z(10.0, 1.0), 0.1) << "the crown: the plane";
+  EXPECT_NEAR(g.z(10.0, 1.0 - 2.0), 0.1 - 0.06, 1e-12);
+  EXPECT_NEAR(g.z(0.0, 7.0), -0.18, 1e-12) << "the left road edge";
+  EXPECT_NEAR(g.z(0.0, 7.0 + 1e-9), -0.03, 1e-6) << "on the kerb";
+  EXPECT_NEAR(g.z(0.0, 8.0), -0.03 + 0.2, 1e-12) << "half way up the left verge";
+  EXPECT_NEAR(g.z(0.0, 20.0), -0.03 + 0.4, 1e-12);
+  EXPECT_NEAR(g.z(0.0, -20.0), -0.03 + 0.1, 1e-12);
+  // Downward rays meet the surface at z(x, y), anywhere.
+  for (double y = -12.0; y <= 12.0; y += 0.37)
+  {
+    const RayHit hit = g.cast(Eigen::Vector3d(5.0, y, 3.0), -Eigen::Vector3d::UnitZ(), 0.1, 100.0);
+    ASSERT_EQ(hit.object, RayHit::kGround);
+    ASSERT_NEAR(3.0 - hit.range, g.z(5.0, y), 1e-9) << y;
+  }
+  // Slanted rays (a lidar's) meet it where z(x, y) is the ray's height.
+  const Eigen::Vector3d origin(0.0, -0.75, 1.73);
+  for (double azimuth = 0.0; azimuth < 2.0 * M_PI; azimuth += 0.1)
+  {
+    const Eigen::Vector3d d(std::cos(azimuth) * std::cos(0.15), std::sin(azimuth) * std::cos(0.15),
+                            -std::sin(0.15));
+    const RayHit hit = g.cast(origin, d, 0.1, 100.0);
+    ASSERT_TRUE(hit.hit());
+    const Eigen::Vector3d p = origin + hit.range * d;
+    if (std::abs(hit.normal.z()) > 0.5)
+    {
+      ASSERT_NEAR(p.z(), g.z(p.x(), p.y()), 1e-9) << azimuth;
+    }
+  }
+  // A low ray across the road meets the left kerb's face, facing the road.
+  const RayHit kerb = g.cast(Eigen::Vector3d(0.0, 5.0, -0.1), Eigen::Vector3d::UnitY(), 0.1, 100.0);
+  ASSERT_EQ(kerb.object, RayHit::kGround);
+  EXPECT_NEAR(kerb.range, 2.0, 1e-9);
+  EXPECT_TRUE(kerb.normal.isApprox(-Eigen::Vector3d::UnitY()));
+  EXPECT_THROW(
+      []
+      {
+        GroundSurface bad;
+        bad.camber = -0.01;
+        bad.validate();
+      }(),
+      std::invalid_argument);
+}
+
+TEST(GroundSurface, ActorsAndBuildingsStandOnIt)
+{
+  GroundSurface g;
+  g.camber = 0.03;
+  g.kerb_height = 0.15;
+  g.verge_rise_left = 0.5;
+  g.verge_width = 3.0;
+  Actor car;
+  car.trajectory = Trajectory::parked({10.0, -5.0, 0.0});
+  SceneryBox building;
+  building.box.pose = {0.0, 10.0, 0.0};
+  building.box.length = 20.0;
+  building.box.width = 6.0;  // from y = 7 (on the verge's slope) to 13 (beyond it)
+  building.box.height = 8.0;
+  const SceneSnapshot scene({car}, {building}, 0.0, g);
+  EXPECT_NEAR(scene.actorBoxes()[0].base_z, -0.15, 1e-12);
+  EXPECT_NEAR(scene.sceneryBoxes()[0].base_z, g.z(0.0, 7.0), 1e-12) << "its lowest corner";
+  // The lidar sees the car's rear face from behind, above the cambered road.
+  const RayHit hit = scene.cast(Eigen::Vector3d(0.0, -5.0, 0.0), Eigen::Vector3d::UnitX(), 0.1, 100.0);
+  EXPECT_EQ(hit.object, 0);
+  EXPECT_NEAR(hit.range, 10.0 - 2.0, 1e-9);
+  // And the flat default leaves everything where it stood.
+  const SceneSnapshot flat({car}, {building}, 0.0);
+  EXPECT_EQ(flat.actorBoxes()[0].base_z, 0.0);
+  EXPECT_EQ(flat.sceneryBoxes()[0].base_z, 0.0);
+  EXPECT_FALSE(flat.ground().profiled());
+  EXPECT_FALSE(flat.hasGlass());
+}
+
+TEST(Lidar, SeesThroughTheWindowsOfCarProfiles)
+{
+  // A car 8 m to the left, a wall 4 m behind it: beams through the side windows reach the car's
+  // far side or the wall; a box hides the wall at that height.
+  Actor car;
+  car.length = 4.3;
+  car.width = 1.8;
+  car.height = 1.5;
+  car.trajectory = Trajectory::parked({0.0, 8.0, 0.0});
+  SceneryBox wall;
+  wall.box.pose = {0.0, 13.0, 0.0};
+  wall.box.length = 30.0;
+  wall.box.width = 1.0;
+  wall.box.height = 6.0;
+  LidarConfig config;
+  config.azimuth_steps = 2048;
+  config.dropout = 0.0;
+  config.range_noise_std = 0.0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation().z() = 1.73;
+  const auto wallBehindCar = [&](VehicleShape shape)
+  {
+    car.shape = shape;
+    const SceneSnapshot scene({car}, {wall}, 0.0);
+    std::mt19937 rng(5);
+    int count = 0;
+    for (const LidarPoint& p : simulateLidarScan(scene, pose, config, rng))
+    {
+      // Wall hits 0.6 to 1.3 m above the ground: below the box's shadow line.
+      count += std::abs(p.x) < 1.0 && p.y > 12.4 && p.y < 12.6 && p.z > -1.13 && p.z < -0.43 ? 1 : 0;
+    }
+    return count;
+  };
+  EXPECT_GT(wallBehindCar(VehicleShape::kCar), 5);
+  EXPECT_EQ(wallBehindCar(VehicleShape::kBox), 0);
 }
 
 }  // namespace grid_vision_fusion

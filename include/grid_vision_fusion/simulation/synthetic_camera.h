@@ -1,5 +1,6 @@
-// A ray-casting camera for the synthetic world: shaded box faces in depth order over a road and
-// a sky, an object-id buffer, and per-actor 2-D boxes, truncation and occlusion for labels.
+// A ray-casting camera for the synthetic world: shaded box faces (or vehicle profiles, their
+// windows opaque) in depth order over the ground (a road) and a sky, an object-id buffer, and
+// per-actor 2-D boxes, truncation and occlusion for labels.
 #pragma once
 
 #include <Eigen/Geometry>
