@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace grid_vision_fusion
@@ -619,6 +620,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   initialised_ = true;
   last_stamp_ = stamp;
   ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
+  sensor_origin_ = world_from_sensor.translation();
 
   // 2. Inverse sensor model: p_o per cell; the cells the scan shows vacated or appearing.
   const Clock::time_point t_model = Clock::now();
@@ -665,6 +667,29 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   cycle.sensor_model_seconds = std::chrono::duration<double>(t_model_end - t_model).count();
   cycle.filter_seconds = std::chrono::duration<double>((t_end - t_start) - (t_model_end - t_model)).count();
   return cycle;
+}
+
+void DynamicGridFilter::cellGroundHeights(std::vector<float>& z) const
+{
+  z.assign(geometry_.cellCount(), std::numeric_limits<float>::quiet_NaN());
+  if (!initialised_)
+  {
+    return;
+  }
+  const auto oz = static_cast<float>(sensor_origin_.z());
+  forRowBlocks(
+      [&](std::size_t, int r0, int r1)
+      {
+        for (int row = r0; row < r1; ++row)
+        {
+          const auto dy = static_cast<float>(geometry_.cellCenterY(row) - sensor_origin_.y());
+          for (int col = 0; col < geometry_.width; ++col)
+          {
+            const auto dx = static_cast<float>(geometry_.cellCenterX(col) - sensor_origin_.x());
+            z[geometry_.index(row, col)] = oz + sensor_model_.groundHeightAt(dx, dy);
+          }
+        }
+      });
 }
 
 void DynamicGridFilter::resetAfterTimeJump(double stamp, DynamicGridCycle& cycle)

@@ -14,6 +14,9 @@ namespace
 {
 constexpr float kPi = 3.14159265358979323846F;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+/// How far before a sector's nearest obstacle its ground is read for the cells at and behind that
+/// obstacle [m] (groundHeightAt()): before the range bins the obstacle's own low points fall in.
+constexpr float kGroundBeforeObstacle = 0.5F;
 // Blocks of a fixed size (points, sectors, grid rows, grid columns): per-block counters summed in
 // block order and per-sector minima / maxima make the result independent of the thread count.
 constexpr std::size_t kPointBlock = 8192;
@@ -157,6 +160,24 @@ float InverseSensorModel::groundHeight(double azimuth, double range) const
 {
   const int s = sectorOf(static_cast<float>(std::cos(azimuth)), static_cast<float>(std::sin(azimuth)));
   const int b = std::clamp(static_cast<int>(range / config_.range_resolution), 0, range_bins_ - 1);
+  return ground_z_[static_cast<std::size_t>(s) * static_cast<std::size_t>(range_bins_) +
+                   static_cast<std::size_t>(b)];
+}
+
+float InverseSensorModel::groundHeightAt(float dx, float dy) const
+{
+  const float range = std::hypot(dx, dy);
+  if (!(range <= static_cast<float>(config_.max_range)))
+  {
+    return std::numeric_limits<float>::quiet_NaN();
+  }
+  // From the sector's nearest obstacle on (and behind it, where the scan does not reach the
+  // ground), the ground just before that obstacle: the lowest points of an obstacle's own range
+  // bins can pass for ground within ground_tolerance, bin after bin, and climb it.
+  const int s = sectorOf(dx, dy);
+  const float before = first_hit_[static_cast<std::size_t>(s)] - kGroundBeforeObstacle;
+  const float r = range < before ? range : std::max(0.0F, before);
+  const int b = std::min(static_cast<int>(r / static_cast<float>(config_.range_resolution)), range_bins_ - 1);
   return ground_z_[static_cast<std::size_t>(s) * static_cast<std::size_t>(range_bins_) +
                    static_cast<std::size_t>(b)];
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -149,6 +150,7 @@ struct SelectedCell
   float vy = 0.0F;
   double x = 0.0;  ///< ground point in the grid frame [m]
   double y = 0.0;
+  double z = 0.0;
 };
 
 /// @throws std::invalid_argument when the grid, the config or the geometry is invalid.
@@ -251,9 +253,10 @@ void projectColumn(const GridCellsView& grid, const SelectedCell& cell, const Co
   const Eigen::Matrix<double, 3, 4>& m = column.m;
   const double x = cell.x;
   const double y = cell.y;
-  const double hu0 = m(0, 0) * x + m(0, 1) * y + m(0, 2) * column.ground_z + m(0, 3);
-  const double hv0 = m(1, 0) * x + m(1, 1) * y + m(1, 2) * column.ground_z + m(1, 3);
-  const double hw0 = m(2, 0) * x + m(2, 1) * y + m(2, 2) * column.ground_z + m(2, 3);
+  const double z = cell.z;
+  const double hu0 = m(0, 0) * x + m(0, 1) * y + m(0, 2) * z + m(0, 3);
+  const double hv0 = m(1, 0) * x + m(1, 1) * y + m(1, 2) * z + m(1, 3);
+  const double hw0 = m(2, 0) * x + m(2, 1) * y + m(2, 2) * z + m(2, 3);
   for (int k = 0; k < column.points_per_cell; ++k)
   {
     const double dz = k * column.column_step;
@@ -338,6 +341,10 @@ ProjectedCells projectGrid(const GridCellsView& grid, const PinholeCamera& camer
         ++out.cells_invalid;
         continue;
       }
+      const float cell_ground = config.ground_from_grid && grid.ground_z
+                                    ? grid.ground_z[cell.index]
+                                    : std::numeric_limits<float>::quiet_NaN();
+      cell.z = std::isfinite(cell_ground) ? static_cast<double>(cell_ground) : column.ground_z;
       projectColumn(grid, cell, column, config, out);
     }
   }

@@ -57,6 +57,7 @@ DynamicGrid::Ptr dynamicGridToMsg(const DynamicGridFilter& filter, const std_msg
   {
     msg->scans_since_hit[i] = filter.scansSinceHit(i);
   }
+  filter.cellGroundHeights(msg->ground_z);
   return msg;
 }
 

@@ -2,9 +2,11 @@
 
 #include <boost/make_shared.hpp>
 
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace grid_vision_fusion
 {
@@ -31,10 +33,15 @@ std::string checkDynamicGrid(const DynamicGrid& msg)
       return error.str();
     }
   }
-  if (!msg.scans_since_hit.empty() && msg.scans_since_hit.size() != cells)
+  const std::array<std::pair<const char*, std::size_t>, 2> optional{
+      {{"scans_since_hit", msg.scans_since_hit.size()}, {"ground_z", msg.ground_z.size()}}};
+  for (const auto& [name, size] : optional)
   {
-    return "DynamicGrid array scans_since_hit has " + std::to_string(msg.scans_since_hit.size()) +
-           " elements, expected none or width*height = " + std::to_string(cells);
+    if (size != 0 && size != cells)
+    {
+      return std::string("DynamicGrid array ") + name + " has " + std::to_string(size) +
+             " elements, expected none or width*height = " + std::to_string(cells);
+    }
   }
   if (!std::isfinite(msg.info.resolution) || !(msg.info.resolution > 0.F))
   {
@@ -78,6 +85,10 @@ GridCellsView gridCellsViewOf(const DynamicGrid& msg)
   if (msg.scans_since_hit.size() == cells)  // optional too
   {
     view.scans_since_hit = msg.scans_since_hit.data();
+  }
+  if (msg.ground_z.size() == cells)  // optional too
+  {
+    view.ground_z = msg.ground_z.data();
   }
   return view;
 }

@@ -650,6 +650,37 @@ TEST(DynamicGridFilter, EgoMotionPastParkedBoxesKeepsThemStatic)
   EXPECT_GE(static_wins * 100, occupied * 85) << static_wins << " of " << occupied;
 }
 
+TEST(DynamicGridFilter, CellGroundFollowsTheScansGroundAndIsUnknownBeyondItsRange)
+{
+  DynamicGridConfig config = testConfig();
+  config.sensor_model.max_range = 40.0;
+  DynamicGridFilter filter(config);
+  std::vector<float> ground;
+  filter.cellGroundHeights(ground);
+  ASSERT_EQ(ground.size(), filter.geometry().cellCount());
+  EXPECT_TRUE(std::isnan(ground.front())) << "no scan yet: no ground";
+
+  BoxWorldLidarConfig lidar_config;
+  lidar_config.ground_slope_x = std::tan(4.0 * M_PI / 180.0);  // 4 degrees uphill along +x
+  BoxWorldLidar lidar(lidar_config);
+  Box parked;
+  parked.x = 22.0;
+  parked.y = 4.0;
+  const auto pose = sensorPose(0.0, 0.0, kSensorHeight);
+  step(filter, lidar, pose, {parked}, 0.0);
+  filter.cellGroundHeights(ground);
+  // The ground plane at the sensor's height would be 0 everywhere; the scan's ground climbs.
+  for (double x : {5.0, 15.0, 30.0})
+  {
+    EXPECT_NEAR(ground[cellAt(filter, x, -2.0)], lidar.groundZ(x, -2.0), 0.1) << "x = " << x;
+  }
+  // Under the parked box the ground is the one just before its face, not its body.
+  const double under = ground[cellAt(filter, parked.x, parked.y)];
+  EXPECT_NEAR(under, lidar.groundZ(parked.x - 0.5 * parked.length, parked.y), 0.2);
+  // Beyond the sensor model's range the scan says nothing.
+  EXPECT_TRUE(std::isnan(ground[cellAt(filter, 44.0, 0.0)]));
+}
+
 TEST(DynamicGridFilter, TimeJumpBackwardsAndLongGapsReset)
 {
   DynamicGridFilter filter(testConfig());

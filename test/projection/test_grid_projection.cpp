@@ -201,6 +201,34 @@ TEST(GridProjection, GroundPointAndColumnLandOnTheKittiCheckValues)
   }
 }
 
+TEST(GridProjection, CellsStandOnTheGroundTheGridCarries)
+{
+  const KittiSetup kitti;
+  TestGrid grid = TestGrid(5, 5, 0.2, 9.5, -0.5);  // cell (2, 2) has its centre at (10, 0)
+  grid.set(10.0, 0.0, 0.9F, 0.05F);
+  grid.set(10.2, 0.2, 0.9F, 0.05F);  // cell (3, 3): no ground of its own
+  std::vector<float> ground(grid.p_static.size(), std::numeric_limits<float>::quiet_NaN());
+  ground[2 * 5 + 2] = -1.98F;  // the road 0.25 m lower than the plane at the sensor's height
+  GridCellsView view = grid.view();
+  view.ground_z = ground.data();
+  const GridProjectionConfig config;
+  const ProjectedCells cells = projectGrid(view, kitti.camera, kitti.geometry, config);
+  ASSERT_EQ(cells.size(), 2U);
+  const Eigen::Vector2d own = kitti.pixelOf(Eigen::Vector3d(10.0, 0.0, -1.98));
+  EXPECT_NEAR(cells.u[0], own.x(), 1e-3);
+  EXPECT_NEAR(cells.v[0], own.y(), 1e-3);
+  EXPECT_GT(cells.v[0], 303.5 + 10.0) << "0.25 m lower at 10 m: about 18 px lower in the image";
+  const Eigen::Vector2d plane = kitti.pixelOf(Eigen::Vector3d(10.2, 0.2, -1.73));
+  EXPECT_NEAR(cells.v[1], plane.y(), 1e-3) << "a cell without a ground of its own takes the plane";
+
+  GridProjectionConfig plane_only = config;
+  plane_only.ground_from_grid = false;
+  const ProjectedCells on_plane = projectGrid(view, kitti.camera, kitti.geometry, plane_only);
+  ASSERT_EQ(on_plane.size(), 2U);
+  EXPECT_NEAR(on_plane.u[0], 615.3, kPixelTolerance);
+  EXPECT_NEAR(on_plane.v[0], 303.5, kPixelTolerance);
+}
+
 TEST(GridProjection, DropsCellsBehindTooNearOrOutsideTheImage)
 {
   const KittiSetup kitti;

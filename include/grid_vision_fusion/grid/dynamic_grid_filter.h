@@ -186,6 +186,12 @@ public:
   }
   /// Ground height below the sensor of the last scan, fixed frame z [m].
   double groundZ() const { return ground_z_; }
+  /// The ground under every cell as the last scan shows it, fixed frame z [m], row-major like
+  /// cells(): the inverse sensor model's ground along the cell's polar sector at its range, or,
+  /// from the sector's nearest obstacle on, just before that obstacle (where it stands, and where
+  /// the scan does not reach the ground behind it; InverseSensorModel::groundHeightAt()). NaN
+  /// beyond the model's max_range and before the first scan. Resizes `z` to the cell count.
+  void cellGroundHeights(std::vector<float>& z) const;
   bool initialised() const { return initialised_; }
   double lastStamp() const { return last_stamp_; }
 
@@ -339,6 +345,7 @@ private:
   bool initialised_ = false;
   double last_stamp_ = 0.0;
   double ground_z_ = 0.0;
+  Eigen::Vector3d sensor_origin_ = Eigen::Vector3d::Zero();  ///< of the last scan, fixed frame [m]
 };
 
 /// Inverse of the standard normal CDF (Acklam's rational approximation, relative error

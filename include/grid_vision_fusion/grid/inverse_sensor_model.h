@@ -96,6 +96,12 @@ public:
   /// Ground height estimate of the last scan at horizontal range `range` [m] in the sector of
   /// the fixed-frame azimuth `azimuth` [rad], relative to the sensor origin [m].
   float groundHeight(double azimuth, double range) const;
+  /// The ground under the point at the horizontal offset (`dx`, `dy`) [m] from the sensor,
+  /// fixed-frame axes, relative to the sensor origin [m]: groundHeight() at its range, or, at and
+  /// beyond the sector's nearest obstacle hit, 0.5 m before that hit (an obstacle's own lowest
+  /// points can pass for ground within ground_tolerance, bin after bin, and climb it: up to 1.3 m
+  /// under the pedestrians of the scenario suite). NaN beyond max_range.
+  float groundHeightAt(float dx, float dy) const;
 
 private:
   int sectorOf(float dx, float dy) const;

@@ -35,6 +35,10 @@ struct GridCellsView
   /// Scans since each cell last held obstacle points (DynamicGridFilter::scansSinceHit());
   /// optional (nullptr: every cell counts as seen in the grid's scan).
   const std::uint8_t* scans_since_hit = nullptr;
+  /// z of the ground under each cell in the grid frame [m], as the scan shows it
+  /// (DynamicGridFilter::cellGroundHeights()); optional (nullptr, or NaN in a cell: the
+  /// ProjectionGeometry's ground plane).
+  const float* ground_z = nullptr;
 
   std::size_t size() const { return static_cast<std::size_t>(width) * height; }
   /// @throws std::invalid_argument when the resolution is not finite and > 0, the origin is not
@@ -105,6 +109,11 @@ struct GridProjectionConfig
   /// object stays in the fusion band of its box, which the image's edge cuts. Off: such cells
   /// are dropped (the paper's ground points only). Applies to the ground point of every mode.
   bool near_cells_at_bottom = true;
+  /// Each cell's ground point at the ground the grid carries for it (GridCellsView::ground_z, the
+  /// scan's own ground under the cell), where it has one; else, and when false, at the
+  /// ProjectionGeometry's ground plane. A road's camber, slope or raised verge, or the vehicle's
+  /// roll, then no longer lifts an object's cells out of the fusion band of its box.
+  bool ground_from_grid = true;
   /// Predict the position of DYNAMIC cells to the image stamp with their velocity:
   /// (x, y) += (vx, vy)·(t_image − t_grid). STATIC cells do not move.
   bool predict_to_image_stamp = true;
@@ -118,7 +127,9 @@ struct ProjectionGeometry
 {
   /// camera (rectified optical frame) ← grid frame, at the image stamp.
   Eigen::Isometry3d camera_from_grid = Eigen::Isometry3d::Identity();
-  /// z of the ground plane in the grid frame [m]: where the cells' ground points lie.
+  /// z of the ground plane in the grid frame [m]: where the cells' ground points lie, unless the
+  /// grid carries each cell's ground (GridCellsView::ground_z) and GridProjectionConfig::
+  /// ground_from_grid says to use it.
   double ground_z = 0.0;
   /// t_image − t_grid [s]; used when GridProjectionConfig::predict_to_image_stamp.
   double time_offset = 0.0;
