@@ -50,7 +50,9 @@ options:
   --labels <dir>           ground truth from label files <frame>.txt (KITTI object format plus a
                            final static/dynamic column) instead of tracklet_labels.xml
   --topic <name>           DetectedObjectArray topic (default /objects)
-  --world-frame <name>     expected header.frame_id of the detections (default world)
+  --world-frame <name>     header.frame_id of detections in the truth's frame (default world)
+  --odom-frame <name>      header.frame_id of detections in the odometry frame, moved into the
+                           world frame with the drive's dead-reckoned OXTS poses (default odom)
   --stamp-tolerance <s>    largest |message stamp - image stamp| of a match (default 0.05)
   --max-range <m>          longitudinal distance limit: ground truth beyond it is ignored,
                            detections beyond it count only as true positives (default 30)
@@ -137,6 +139,7 @@ Options parseArguments(int argc, char** argv)
       {"--output", [&](const std::string&, const std::string& v) { o.output = v; }},
       {"--topic", [&](const std::string&, const std::string& v) { o.bag.topic = v; }},
       {"--world-frame", [&](const std::string&, const std::string& v) { o.bag.world_frame = v; }},
+      {"--odom-frame", [&](const std::string&, const std::string& v) { o.bag.odom_frame = v; }},
       {"--stamp-tolerance",
        [&](const std::string& n, const std::string& v) { o.bag.stamp_tolerance_s = toNumber(n, v); }},
       {"--max-range",
@@ -320,8 +323,8 @@ int run(const Options& o)
   }
   if (s.other_frame > 0)
   {
-    std::cerr << "warning: " << s.other_frame << " messages are not in frame '" << o.bag.world_frame
-              << "': their positions are compared as if they were\n";
+    std::cerr << "warning: " << s.other_frame << " messages are neither in frame '" << o.bag.world_frame
+              << "' nor in '" << o.bag.odom_frame << "': their positions are compared as if in the first\n";
   }
   if (s.invalid_objects > 0)
   {

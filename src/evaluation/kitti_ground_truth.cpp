@@ -227,6 +227,7 @@ KittiDrive KittiDrive::read(const std::string& drive_dir, const std::string& cal
     }
   }
   drive.world_from_imu = oxtsPosesRelativeToFirst(oxts);
+  drive.odom_from_imu = alongHeadingPoses(drive.world_from_imu);
   drive.calibration =
       KittiRawCalibration::readDirectory(calibration_dir.empty() ? parentOf(drive_dir) : calibration_dir);
   if (with_tracklets)
@@ -244,6 +245,17 @@ Eigen::Isometry3d KittiDrive::worldFromVelo(int frame) const
                             std::to_string(world_from_imu.size()) + " frames");
   }
   return world_from_imu[static_cast<std::size_t>(frame)] * calibration.velo_from_imu.inverse();
+}
+
+Eigen::Isometry3d KittiDrive::worldFromOdom(int frame) const
+{
+  if (frame < 0 || frame >= static_cast<int>(odom_from_imu.size()))
+  {
+    throw std::out_of_range("frame " + std::to_string(frame) + " outside the drive's " +
+                            std::to_string(odom_from_imu.size()) + " frames");
+  }
+  const auto f = static_cast<std::size_t>(frame);
+  return world_from_imu[f] * odom_from_imu[f].inverse();
 }
 
 std::vector<double> KittiDrive::frameTimes() const
@@ -344,19 +356,6 @@ Eigen::Vector3d fittedVelocity(const std::vector<Eigen::Vector3d>& positions,
     stp += (times[i] - mean_t) * (positions[i] - mean_p);
   }
   return stp / stt;
-}
-
-std::vector<Eigen::Isometry3d> alongHeadingPoses(const std::vector<Eigen::Isometry3d>& world_from_imu)
-{
-  std::vector<Eigen::Isometry3d> poses = world_from_imu;
-  for (std::size_t i = 1; i < poses.size(); ++i)
-  {
-    const Eigen::Vector3d heading =
-        (world_from_imu[i - 1].linear().col(0) + world_from_imu[i].linear().col(0)).normalized();
-    const Eigen::Vector3d step = world_from_imu[i].translation() - world_from_imu[i - 1].translation();
-    poses[i].translation() = poses[i - 1].translation() + step.dot(heading) * heading;
-  }
-  return poses;
 }
 
 std::vector<GroundTruthObject> trackletGroundTruth(const KittiDrive& drive,
@@ -748,7 +747,7 @@ TrackingGroundTruth trackingLabelGroundTruth(const std::vector<TrackingLabel>& l
     }
   }
   // The velocities from the positions on the ego's path laid along its heading.
-  const std::vector<Eigen::Isometry3d> along_heading = alongHeadingPoses(drive.world_from_imu);
+  const std::vector<Eigen::Isometry3d>& along_heading = drive.odom_from_imu;
   const Eigen::Isometry3d imu_from_velo = drive.calibration.velo_from_imu.inverse();
   for (auto& [id, track] : tracks)
   {

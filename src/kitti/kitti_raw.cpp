@@ -116,6 +116,19 @@ Eigen::Isometry3d oxtsToMercatorPose(const OxtsRecord& record, double scale)
   return pose;
 }
 
+std::vector<Eigen::Isometry3d> alongHeadingPoses(const std::vector<Eigen::Isometry3d>& world_from_imu)
+{
+  std::vector<Eigen::Isometry3d> poses = world_from_imu;
+  for (std::size_t i = 1; i < poses.size(); ++i)
+  {
+    const Eigen::Vector3d heading =
+        (world_from_imu[i - 1].linear().col(0) + world_from_imu[i].linear().col(0)).normalized();
+    const Eigen::Vector3d step = world_from_imu[i].translation() - world_from_imu[i - 1].translation();
+    poses[i].translation() = poses[i - 1].translation() + step.dot(heading) * heading;
+  }
+  return poses;
+}
+
 std::vector<Eigen::Isometry3d> oxtsPosesRelativeToFirst(const std::vector<OxtsRecord>& records)
 {
   std::vector<Eigen::Isometry3d> poses;

@@ -68,6 +68,25 @@ EvalObject toEvalObject(const DetectedObject& object, const std::string& frame_n
   return o;
 }
 
+namespace
+{
+/// `object` with its position and velocity moved by `to_from_message` (message frame → another).
+DetectedObject inFrame(DetectedObject object, const Eigen::Isometry3d& to_from_message)
+{
+  const Eigen::Vector3d p = to_from_message * Eigen::Vector3d(object.position.x, object.position.y, 0.0);
+  const Eigen::Vector3d v =
+      to_from_message.linear() * Eigen::Vector3d(object.velocity.x, object.velocity.y, 0.0);
+  object.position.x = p.x();
+  object.position.y = p.y();
+  object.velocity.x = v.x();
+  object.velocity.y = v.y();
+  const Eigen::Vector3d heading =
+      to_from_message.linear() * Eigen::Vector3d(std::cos(object.heading), std::sin(object.heading), 0.0);
+  object.heading = static_cast<float>(std::atan2(heading.y(), heading.x()));
+  return object;
+}
+}  // namespace
+
 DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDrive& drive,
                                     const DetectionBagConfig& config, const KittiGroundTruthConfig& labels,
                                     const std::function<void(std::size_t, std::size_t)>& progress)
@@ -131,7 +150,19 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
         ++result.stats.unmatched;
         continue;
       }
-      if (msg->header.frame_id != config.world_frame)
+      Eigen::Isometry3d world_from_message = Eigen::Isometry3d::Identity();
+      if (msg->header.frame_id == config.odom_frame && msg->header.frame_id != config.world_frame)
+      {
+        try
+        {
+          world_from_message = drive.worldFromOdom(frame);
+        }
+        catch (const std::out_of_range& e)
+        {
+          throw std::runtime_error(bag_path + ": detections in " + config.odom_frame + ", but " + e.what());
+        }
+      }
+      else if (msg->header.frame_id != config.world_frame)
       {
         ++result.stats.other_frame;
       }
@@ -152,7 +183,8 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
           ++result.stats.dropped_labels;
           continue;
         }
-        kept.objects.push_back(toEvalObject(object, frame_name, velo_from_world, label));
+        kept.objects.push_back(
+            toEvalObject(inFrame(object, world_from_message), frame_name, velo_from_world, label));
         kept.objects.back().time_s = times[static_cast<std::size_t>(frame)];
       }
       const auto existing = by_frame.find(frame);

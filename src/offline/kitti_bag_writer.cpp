@@ -37,6 +37,7 @@ namespace
 namespace fs = std::filesystem;
 
 constexpr const char* kWorldFrame = "world";
+constexpr const char* kOdomFrame = "odom";
 constexpr const char* kBaseFrame = "base_link";
 constexpr const char* kImuFrame = "imu_link";
 constexpr const char* kVeloFrame = "velo_link";
@@ -498,6 +499,7 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
   }
   records = std::vector<OxtsRecord>(records.begin() + first, records.begin() + last + 1);
   const std::vector<Eigen::Isometry3d> poses = oxtsPosesRelativeToFirst(records);
+  const std::vector<Eigen::Isometry3d> odometry = alongHeadingPoses(poses);
 
   // The static transforms precede every message of the first frame.
   ros::Time start = toRosTime(velo_stamps[static_cast<std::size_t>(first)]);
@@ -543,8 +545,9 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
     if (lead > 0.0 && lead <= kMaxPoseExtrapolationS)
     {
       tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(toTransformMsg(Eigen::Isometry3d::Identity(), kWorldFrame, kOdomFrame, start));
       tf.transforms.push_back(
-          toTransformMsg(poseBefore(poses.front(), records.front(), lead), kWorldFrame, kBaseFrame, start));
+          toTransformMsg(poseBefore(odometry.front(), records.front(), lead), kOdomFrame, kBaseFrame, start));
       write("/tf", start, tf);
     }
 
@@ -554,8 +557,12 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
       const std::size_t local = index - static_cast<std::size_t>(first);
 
       const ros::Time oxts_stamp = toRosTime(oxts_stamps[index]);
+      // REP 105: world → odom → base_link. The grid and the tracks live in the continuous odom
+      // frame; world ← base_link is the OXTS pose, as before.
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(toTransformMsg(poses[local], kWorldFrame, kBaseFrame, oxts_stamp));
+      tf.transforms.push_back(
+          toTransformMsg(poses[local] * odometry[local].inverse(), kWorldFrame, kOdomFrame, oxts_stamp));
+      tf.transforms.push_back(toTransformMsg(odometry[local], kOdomFrame, kBaseFrame, oxts_stamp));
       write("/tf", oxts_stamp, tf);
       write(kImuTopic, oxts_stamp, oxtsToImu(records[local], oxts_stamp));
       write(kGpsFixTopic, oxts_stamp, oxtsToNavSatFix(records[local], oxts_stamp));

@@ -156,4 +156,39 @@ TEST(KittiTracklets, BrokenFilesNameTheFault)
             std::string::npos);
 }
 
+TEST(AlongHeadingPoses, TheSidewaysDriftGoesTheLengthAndTheTurnsStay)
+{
+  // Heading along x, positions running 0.03 m sideways per 1 m forward: laid along x.
+  std::vector<Eigen::Isometry3d> drifting(5, Eigen::Isometry3d::Identity());
+  for (int i = 0; i < 5; ++i)
+  {
+    drifting[i].translation() = Eigen::Vector3d(i, 0.03 * i, 0.0);
+  }
+  const std::vector<Eigen::Isometry3d> laid = alongHeadingPoses(drifting);
+  ASSERT_EQ(laid.size(), 5U);
+  EXPECT_TRUE(laid[4].translation().isApprox(Eigen::Vector3d(4.0, 0.0, 0.0), 1e-12));
+  EXPECT_TRUE(laid[4].linear().isApprox(drifting[4].linear(), 1e-12));
+  // A turn without slip (on a circle of radius 20 m, heading along the tangent): kept.
+  std::vector<Eigen::Isometry3d> circle;
+  for (int i = 0; i < 10; ++i)
+  {
+    const double a = 0.05 * i;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pose.translation() = Eigen::Vector3d(20.0 * std::sin(a), 20.0 * (1.0 - std::cos(a)), 0.0);
+    circle.push_back(pose);
+  }
+  const std::vector<Eigen::Isometry3d> kept = alongHeadingPoses(circle);
+  for (std::size_t i = 0; i < circle.size(); ++i)
+  {
+    EXPECT_TRUE(kept[i].translation().isApprox(circle[i].translation(), 1e-9)) << i;
+  }
+  // Standing still with jittering positions: the jitter along the heading only, no creeping.
+  std::vector<Eigen::Isometry3d> standing(3, Eigen::Isometry3d::Identity());
+  standing[1].translation() = Eigen::Vector3d(0.02, 0.01, 0.0);
+  standing[2].translation() = Eigen::Vector3d(-0.01, -0.02, 0.0);
+  EXPECT_TRUE(alongHeadingPoses(standing)[2].translation().isApprox(Eigen::Vector3d(-0.01, 0.0, 0.0), 1e-12));
+  EXPECT_TRUE(alongHeadingPoses({}).empty());
+}
+
 }  // namespace grid_vision_fusion

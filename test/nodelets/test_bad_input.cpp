@@ -109,7 +109,7 @@ sensor_msgs::Image::Ptr makeImage(const ros::Time& stamp)
 }
 
 /// A 10 × 10 grid of 0.5 m cells 5 m ahead of the camera, all static occupied.
-DynamicGrid::Ptr makeGrid(const ros::Time& stamp, const std::string& frame = "world")
+DynamicGrid::Ptr makeGrid(const ros::Time& stamp, const std::string& frame = "odom")
 {
   auto grid = boost::make_shared<DynamicGrid>();
   grid->header.stamp = stamp;
@@ -171,7 +171,7 @@ ProjectedGrid::Ptr makeProjected(const ros::Time& stamp)
   msg->header.stamp = stamp;
   msg->header.frame_id = "camera_optical";
   msg->grid_stamp = stamp;
-  msg->grid_frame_id = "world";
+  msg->grid_frame_id = "odom";
   msg->image_width = 64;
   msg->image_height = 32;
   for (int i = 0; i < 3; ++i)
@@ -190,14 +190,14 @@ ProjectedGrid::Ptr makeProjected(const ros::Time& stamp)
   return msg;
 }
 
-/// world -> `child`, `z` m above the origin; an optical frame looks along +x (x right = -y,
+/// odom -> `child`, `z` m above the origin; an optical frame looks along +x (x right = -y,
 /// y down = -z, z forward = +x).
 geometry_msgs::TransformStamped transform(const std::string& child, const ros::Time& stamp, double z,
                                           bool optical)
 {
   geometry_msgs::TransformStamped t;
   t.header.stamp = stamp;
-  t.header.frame_id = "world";
+  t.header.frame_id = "odom";
   t.child_frame_id = child;
   t.transform.translation.z = z;
   if (optical)
@@ -787,7 +787,8 @@ int main(int argc, char** argv)
   {
     ADD_FAILURE() << "cannot load the yolo_detector nodelet into /manager";
   }
-  // Static tf: the lidar 1.73 m and the camera 1.5 m above the origin of "world".
+  // Static tf: the lidar 1.73 m and the camera 1.5 m above the origin of "odom" (the grid's default fixed
+  // frame).
   tf2_ros::StaticTransformBroadcaster broadcaster;
   broadcaster.sendTransform(
       std::vector<geometry_msgs::TransformStamped>{transform("camera_optical", ros::Time::now(), 1.5, true),

@@ -100,12 +100,12 @@ protected:
         << "the dynamic_grid nodelet did not connect to points/grid/grid/occupancy/grid/cells";
   }
 
-  // The vehicle drives along +x at 10 m/s: tf world <- velodyne at `stamp`, then the cloud.
+  // The vehicle drives along +x at 10 m/s: tf odom <- velodyne at `stamp`, then the cloud.
   void send(const sensor_msgs::PointCloud2::Ptr& cloud, double x)
   {
     geometry_msgs::TransformStamped tf;
     tf.header.stamp = cloud->header.stamp;
-    tf.header.frame_id = "world";
+    tf.header.frame_id = "odom";
     tf.child_frame_id = kLidarFrame;
     tf.transform.translation.x = x;
     tf.transform.translation.z = 1.73;
@@ -149,10 +149,10 @@ TEST_F(DynamicGridNodeletTest, PublishesAllThreeOutputsAndSurvivesBadInput)
     ASSERT_TRUE(waitForStamp(stamp)) << "no output for scan " << k;
   }
 
-  // DynamicGrid: world frame, scan stamp, 300 x 300 cells of 0.2 m, centre 15 m ahead of the
+  // DynamicGrid: odom frame, scan stamp, 300 x 300 cells of 0.2 m, centre 15 m ahead of the
   // lidar at x = 1.0 (whole cells), valid distributions.
   const DynamicGrid& grid = *grids_.back();
-  EXPECT_EQ(grid.header.frame_id, "world");
+  EXPECT_EQ(grid.header.frame_id, "odom");
   EXPECT_EQ(grid.info.width, 300U);
   EXPECT_EQ(grid.info.height, 300U);
   EXPECT_FLOAT_EQ(grid.info.resolution, 0.2F);
@@ -185,7 +185,7 @@ TEST_F(DynamicGridNodeletTest, PublishesAllThreeOutputsAndSurvivesBadInput)
 
   // OccupancyGrid: same geometry, values in {-1} u [0, 100], unknown behind the wall.
   const nav_msgs::OccupancyGrid& occupancy = *occupancies_.back();
-  EXPECT_EQ(occupancy.header.frame_id, "world");
+  EXPECT_EQ(occupancy.header.frame_id, "odom");
   EXPECT_EQ(occupancy.info.width, 300U);
   EXPECT_DOUBLE_EQ(occupancy.info.origin.position.x, grid.info.origin.position.x);
   ASSERT_EQ(occupancy.data.size(), n);
@@ -197,9 +197,9 @@ TEST_F(DynamicGridNodeletTest, PublishesAllThreeOutputsAndSurvivesBadInput)
   EXPECT_LT(occupancy.data[free_cell], 50);
   EXPECT_GE(occupancy.data[free_cell], 0);
 
-  // grid/cells: world frame, the documented fields, points of the wall at the ground height.
+  // grid/cells: odom frame, the documented fields, points of the wall at the ground height.
   const sensor_msgs::PointCloud2& cells = *cells_.back();
-  EXPECT_EQ(cells.header.frame_id, "world");
+  EXPECT_EQ(cells.header.frame_id, "odom");
   std::set<std::string> names;
   for (const auto& f : cells.fields)
   {

@@ -79,13 +79,14 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
   std::vector<EvalObject> detections;
   for (const auto& msg : received)
   {
-    EXPECT_EQ(msg->header.frame_id, "world");
+    EXPECT_EQ(msg->header.frame_id, "odom") << "the grid's fixed frame: kitti_to_bag's odometry (REP 105)";
     const int frame = nearestFrame(times, msg->header.stamp.toSec(), 0.05);
     ASSERT_GE(frame, 0) << "objects stamped " << msg->header.stamp << " match no image";
-    const Eigen::Isometry3d velo_from_world = drive.worldFromVelo(frame).inverse();
+    const Eigen::Isometry3d velo_from_odom =
+        drive.worldFromVelo(frame).inverse() * drive.worldFromOdom(frame);
     for (const DetectedObject& o : msg->objects)
     {
-      detections.push_back(toEvalObject(o, kittiFrameName(frame), velo_from_world, labels.labelOf(o.label)));
+      detections.push_back(toEvalObject(o, kittiFrameName(frame), velo_from_odom, labels.labelOf(o.label)));
     }
   }
   EvaluationConfig config;

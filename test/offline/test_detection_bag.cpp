@@ -8,6 +8,8 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -305,6 +307,42 @@ TEST(DetectionBag, MatchesStampsWithinTheTolerance)
   EXPECT_EQ(read_wide.stats.unmatched, 0U);
   EXPECT_EQ(read_wide.stats.duplicates, 2U);
   EXPECT_EQ(read_wide.stats.other_frame, 1U);
+}
+
+TEST(DetectionBag, DetectionsInTheOdometryFrameAreMovedIntoTheWorldFrame)
+{
+  // The same perfect detections, published in odom (the grid's frame): each position is the
+  // world one moved by odom <- world of its frame, as kitti_to_bag's tf says; read back, they
+  // are the world positions again, and nothing is counted as another frame.
+  std::map<int, DetectedObjectArray> world = perfectMessages();
+  std::map<int, DetectedObjectArray> odom = world;
+  double largest_shift = 0.0;
+  for (auto& [f, msg] : odom)
+  {
+    msg.header.frame_id = "odom";
+    const Eigen::Isometry3d odom_from_world = drive().worldFromOdom(f).inverse();
+    for (DetectedObject& o : msg.objects)
+    {
+      const Eigen::Vector3d p = odom_from_world * Eigen::Vector3d(o.position.x, o.position.y, 0.0);
+      largest_shift = std::max(largest_shift, std::hypot(p.x() - o.position.x, p.y() - o.position.y));
+      o.position.x = p.x();
+      o.position.y = p.y();
+    }
+  }
+  EXPECT_GT(largest_shift, 1e-3) << "drive 0001's OXTS track leaves its heading: odom differs";
+  const DetectionBagResult from_world =
+      readDetectionBag(writeBag("in_world", world), drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
+  const DetectionBagResult from_odom =
+      readDetectionBag(writeBag("in_odom", odom), drive(), DetectionBagConfig{}, KittiGroundTruthConfig{});
+  EXPECT_EQ(from_odom.stats.other_frame, 0U);
+  ASSERT_EQ(from_odom.detections.size(), from_world.detections.size());
+  ASSERT_FALSE(from_odom.detections.empty());
+  for (std::size_t i = 0; i < from_odom.detections.size(); ++i)
+  {
+    EXPECT_NEAR(from_odom.detections[i].x, from_world.detections[i].x, 1e-6);
+    EXPECT_NEAR(from_odom.detections[i].y, from_world.detections[i].y, 1e-6);
+    EXPECT_NEAR(from_odom.detections[i].longitudinal_m, from_world.detections[i].longitudinal_m, 1e-6);
+  }
 }
 
 TEST(DetectionBag, InvalidObjectsAndDroppedClassesAreCounted)

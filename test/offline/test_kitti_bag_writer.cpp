@@ -247,10 +247,16 @@ TEST_F(KittiDriveFixture, CountsStampsAndFramesPerTopic)
   {
     const auto k = static_cast<std::size_t>(i);
     const auto tf = bag.at("/tf")[k + 1].instantiate<tf2_msgs::TFMessage>();  // after the lead pose
-    ASSERT_EQ(tf->transforms.size(), 1U);
-    EXPECT_EQ(tf->transforms[0].header.stamp, oxts[k]);
+    ASSERT_EQ(tf->transforms.size(), 2U);
+    for (const auto& t : tf->transforms)
+    {
+      EXPECT_EQ(t.header.stamp, oxts[k]);
+    }
+    // REP 105: world -> odom -> base_link.
     EXPECT_EQ(tf->transforms[0].header.frame_id, "world");
-    EXPECT_EQ(tf->transforms[0].child_frame_id, "base_link");
+    EXPECT_EQ(tf->transforms[0].child_frame_id, "odom");
+    EXPECT_EQ(tf->transforms[1].header.frame_id, "odom");
+    EXPECT_EQ(tf->transforms[1].child_frame_id, "base_link");
     EXPECT_EQ(bag.at("/tf")[k + 1].getTime(), oxts[k]);
 
     const auto imu = bag.at("/kitti/oxts/imu")[k].instantiate<sensor_msgs::Imu>();
@@ -327,15 +333,23 @@ TEST_F(KittiDriveFixture, OxtsMessagesCarryTheRecordValues)
   EXPECT_DOUBLE_EQ(vel->twist.angular.z, -0.021891250950339);  // wu
 }
 
+namespace
+{
+/// world ← base_link of the k-th /tf message: world ← odom ← base_link.
+Eigen::Isometry3d worldFromBase(const std::vector<rosbag::MessageInstance>& tf, std::size_t k)
+{
+  const auto msg = tf.at(k).instantiate<tf2_msgs::TFMessage>();
+  return tf2::transformToEigen(msg->transforms.at(0)) * tf2::transformToEigen(msg->transforms.at(1));
+}
+}  // namespace
+
 TEST_F(KittiDriveFixture, TfOfFrameOneIsTheOxtsPoseRelativeToFrameZero)
 {
   convertKittiDrive(options());
   const auto bag = readBag();
-  const auto tf0 = bag.at("/tf")[1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
-  EXPECT_TRUE(tf2::transformToEigen(tf0).isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+  EXPECT_TRUE(worldFromBase(bag.at("/tf"), 1).isApprox(Eigen::Isometry3d::Identity(), 1e-12));
 
-  const Eigen::Isometry3d pose1 =
-      tf2::transformToEigen(bag.at("/tf")[2].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
+  const Eigen::Isometry3d pose1 = worldFromBase(bag.at("/tf"), 2);
   // Hand values (KITTI devkit convertOxtsToPose on records 0 and 1 of drive 0001).
   EXPECT_NEAR(pose1.translation().x(), 1.4424816836, 1e-6);
   EXPECT_NEAR(pose1.translation().y(), 0.0124398614, 1e-6);
@@ -347,10 +361,33 @@ TEST_F(KittiDriveFixture, TfOfFrameOneIsTheOxtsPoseRelativeToFrameZero)
   for (int i = 0; i < kFrames; ++i)
   {
     const auto k = static_cast<std::size_t>(i);
-    const Eigen::Isometry3d pose =
-        tf2::transformToEigen(bag.at("/tf")[k + 1].instantiate<tf2_msgs::TFMessage>()->transforms.at(0));
-    EXPECT_TRUE(pose.isApprox(poses[k], 1e-9)) << "frame " << i;
+    EXPECT_TRUE(worldFromBase(bag.at("/tf"), k + 1).isApprox(poses[k], 1e-9)) << "frame " << i;
   }
+}
+
+TEST_F(KittiDriveFixture, OdomIsTheOxtsTrackLaidAlongItsHeading)
+{
+  convertKittiDrive(options());
+  const auto bag = readBag();
+  const std::vector<OxtsRecord> records = readOxtsFolder(drive_ + "/oxts");
+  const auto poses =
+      oxtsPosesRelativeToFirst(std::vector<OxtsRecord>(records.begin(), records.begin() + kFrames));
+  const auto odometry = alongHeadingPoses(poses);
+  for (int i = 0; i < kFrames; ++i)
+  {
+    const auto k = static_cast<std::size_t>(i);
+    const auto msg = bag.at("/tf")[k + 1].instantiate<tf2_msgs::TFMessage>();
+    const Eigen::Isometry3d odom_from_base = tf2::transformToEigen(msg->transforms.at(1));
+    EXPECT_TRUE(odom_from_base.isApprox(odometry[k], 1e-9)) << "frame " << i;
+    // world <- odom is the difference of the two positions: a translation, zero at frame 0.
+    const Eigen::Isometry3d world_from_odom = tf2::transformToEigen(msg->transforms.at(0));
+    EXPECT_TRUE(world_from_odom.linear().isApprox(Eigen::Matrix3d::Identity(), 1e-9)) << "frame " << i;
+    EXPECT_NEAR(world_from_odom.translation().norm(),
+                (poses[k].translation() - odometry[k].translation()).norm(), 1e-9);
+  }
+  // Drive 0001 at 13 m/s: the OXTS track leaves the heading by a few centimetres over 0.4 s.
+  EXPECT_GT((poses.back().translation() - odometry.back().translation()).norm(), 1e-4);
+  EXPECT_LT((poses.back().translation() - odometry.back().translation()).norm(), 0.1);
 }
 
 TEST_F(KittiDriveFixture, TheFirstFrameGetsAPoseAtItsEarliestSensorStamp)
@@ -364,7 +401,11 @@ TEST_F(KittiDriveFixture, TheFirstFrameGetsAPoseAtItsEarliestSensorStamp)
   const double lead = (oxts[0] - velo[0]).toSec();
   ASSERT_GT(lead, 0.013);
   ASSERT_LT(lead, 0.014);
-  const auto first = bag.at("/tf")[0].instantiate<tf2_msgs::TFMessage>()->transforms.at(0);
+  const auto lead_tf = bag.at("/tf")[0].instantiate<tf2_msgs::TFMessage>();
+  ASSERT_EQ(lead_tf->transforms.size(), 2U);
+  EXPECT_TRUE(tf2::transformToEigen(lead_tf->transforms[0]).isApprox(Eigen::Isometry3d::Identity(), 1e-12))
+      << "world and odom coincide at the first frame";
+  const auto& first = lead_tf->transforms[1];
   EXPECT_EQ(first.header.stamp, velo[0]) << "the earliest sensor stamp of frame 0 is the scan's";
   const OxtsRecord record = readOxtsFolder(drive_ + "/oxts").front();
   const Eigen::Isometry3d before = tf2::transformToEigen(first);

@@ -176,7 +176,7 @@ TEST(YamlParamSource, ThePackageConfigFilesGiveTheConfigsTheyDocument)
   EXPECT_FALSE(p.sensor_model.hit_neighbours_not_free);
   EXPECT_DOUBLE_EQ(p.static_to_dynamic_by_motion, 0.05);
   const DynamicGridParams gn = DynamicGridParams::fromParams(grid);
-  EXPECT_EQ(gn.fixed_frame, "world");
+  EXPECT_EQ(gn.fixed_frame, "odom");
 
   YamlParamSource detector = YamlParamSource::fromFile(kConfigDir + "/yolo_detector.yaml");
   detector.set("backend", XmlRpc::XmlRpcValue(std::string("replay")));

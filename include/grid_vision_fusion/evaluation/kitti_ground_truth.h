@@ -70,6 +70,9 @@ struct KittiDrive
 {
   std::vector<KittiStamp> stamps;                 ///< image_02/timestamps.txt, one per frame
   std::vector<Eigen::Isometry3d> world_from_imu;  ///< OXTS poses relative to the first frame
+  /// The same in the odometry frame that kitti_to_bag publishes as `odom`: laid along their
+  /// heading (alongHeadingPoses()).
+  std::vector<Eigen::Isometry3d> odom_from_imu;
   KittiRawCalibration calibration;
   std::vector<Tracklet> tracklets;  ///< empty when not read
 
@@ -84,6 +87,9 @@ struct KittiDrive
   int frameCount() const { return static_cast<int>(stamps.size()); }
   /// world ← velodyne of frame `frame`. @throws std::out_of_range for a frame outside the drive.
   Eigen::Isometry3d worldFromVelo(int frame) const;
+  /// world ← odom at frame `frame` (a translation: the GPS position less the dead-reckoned one).
+  /// @throws std::out_of_range for a frame outside the drive.
+  Eigen::Isometry3d worldFromOdom(int frame) const;
   /// Frame times in seconds (KittiStamp::toSec()).
   std::vector<double> frameTimes() const;
 };
@@ -125,16 +131,6 @@ Eigen::Vector3d trajectoryVelocity(const std::vector<Eigen::Vector3d>& positions
 /// the times do not increase.
 Eigen::Vector3d fittedVelocity(const std::vector<Eigen::Vector3d>& positions,
                                const std::vector<double>& times, std::size_t j, double window_s);
-
-/// The poses `world_from_imu` with their positions laid along their heading: position 0 kept,
-/// position i+1 = position i + ((p_{i+1} − p_i) · h) h with h the unit mean of the IMU x axes
-/// (forward) of poses i and i+1; the orientations kept. A vehicle does not slip sideways, but the
-/// OXTS positions of a raw drive do: on 2011_09_26 drive 0009 they run 1–2° to the right of the
-/// OXTS heading (0.1–0.4 m/s sideways at 10.5 m/s, while its INS reports 0.1–0.2 m/s to the left),
-/// and a parked car's world position drifts with them. Laid along the heading, each step keeps
-/// its length along the vehicle and loses that drift; the ego's speed, its turns and the world
-/// frame's orientation stay the OXTS ones.
-std::vector<Eigen::Isometry3d> alongHeadingPoses(const std::vector<Eigen::Isometry3d>& world_from_imu);
 
 /// Ground truth of every tracklet pose of `drive` (see the file comment and the config). A
 /// tracklet with a single pose has no velocity: motion unknown and difficult. Boxes that do not

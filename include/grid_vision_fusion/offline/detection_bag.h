@@ -2,10 +2,12 @@
 // evaluation: every message is matched to the drive frame with the nearest image time stamp and
 // its objects become EvalObjects.
 //
-// Frames: positions and velocities are taken as they are, in the header frame of the message,
-// which must be the ground truth's world frame (the `world` frame of bags made by kitti_to_bag:
-// the IMU frame of the first OXTS record). No tf lookup is made; messages in another frame are
-// counted (DetectionBagStats::other_frame) so that the tool can warn.
+// Frames: positions and velocities are taken in the ground truth's world frame (the `world` frame
+// of bags made by kitti_to_bag: the IMU frame of the first OXTS record). A message in that frame
+// is taken as it is; one in the odometry frame (kitti_to_bag's `odom`, where the grid lives by
+// default) is moved into it with the drive's odometry (KittiDrive::worldFromOdom(), the same
+// dead reckoning as kitti_to_bag's). No tf lookup is made; messages in another frame are taken
+// as they are and counted (DetectionBagStats::other_frame) so that the tool can warn.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -28,7 +30,8 @@ struct DetectionBagConfig
 {
   std::string topic = "/objects";     ///< DetectedObjectArray topic in the bag
   double stamp_tolerance_s = 0.05;    ///< largest |header stamp − image stamp| of a match [s], > 0
-  std::string world_frame = "world";  ///< expected header.frame_id (others are counted)
+  std::string world_frame = "world";  ///< header.frame_id of the ground truth's frame
+  std::string odom_frame = "odom";    ///< header.frame_id moved into it by the drive's odometry
 
   /// @throws std::invalid_argument naming the bad field.
   void validate() const;
@@ -40,7 +43,7 @@ struct DetectionBagStats
   std::size_t messages = 0;         ///< messages on the topic
   std::size_t unmatched = 0;        ///< messages with no frame within the tolerance (left out)
   std::size_t duplicates = 0;       ///< messages of a frame that had one already (the nearer kept)
-  std::size_t other_frame = 0;      ///< messages whose header.frame_id is not world_frame
+  std::size_t other_frame = 0;      ///< messages whose header.frame_id is neither world_frame nor odom_frame
   std::size_t invalid_objects = 0;  ///< objects with a non-finite box, score or position (left out)
   std::size_t dropped_labels = 0;   ///< objects whose label the class map drops
 };

@@ -79,10 +79,11 @@ struct KittiBagSummary
 
 /// Converts the frames [first_frame, last_frame] of a KITTI raw synced drive into a bag.
 /// Topics (kitti2bag names): /kitti/velo/pointcloud, /kitti/<camera>/image_raw and camera_info,
-/// /kitti/oxts/imu, /kitti/oxts/gps/fix, /kitti/oxts/gps/vel, /tf (world → base_link, one per
-/// frame at the OXTS stamp), /tf_static (one latched message at the first stamp: base_link →
-/// imu_link → velo_link → camera frames). A KITTI raw drive's first scan and images are stamped
-/// before its first OXTS record (13 ms on drive 0001): the first pose is also written at the
+/// /kitti/oxts/imu, /kitti/oxts/gps/fix, /kitti/oxts/gps/vel, /tf (world → odom → base_link, one
+/// message per frame at the OXTS stamp: odom ← base_link the OXTS pose laid along its heading,
+/// alongHeadingPoses(), and world ← odom the rest of the OXTS pose), /tf_static (one latched message at the
+/// first stamp: base_link → imu_link → velo_link → camera frames). A KITTI raw drive's first scan and images
+/// are stamped before its first OXTS record (13 ms on drive 0001): the first pose is also written at the
 /// first frame's earliest sensor stamp, moved back along the record's velocity and angular
 /// rate (poseBefore()), when that is at most kMaxPoseExtrapolationS earlier, so that the first
 /// frame has a pose. The bag is written to `<output_bag>.tmp` and renamed

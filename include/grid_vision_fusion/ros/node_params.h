@@ -44,10 +44,11 @@ XmlRpc::XmlRpcValue toParamValue(const std::map<std::string, Footprint>& value);
 /// filter's DynamicGridConfig (sensor model keys flat, without prefix).
 struct DynamicGridParams
 {
-  std::string fixed_frame = "world";  ///< frame of the grid and of the filter's poses, non-empty
-  bool lazy = true;                   ///< subscribe only while someone listens
-  int queue_size = 5;                 ///< clouds waiting for their tf (>= 1)
-  double expected_rate = 10.0;        ///< scan rate for the diagnostics [Hz] (> 0)
+  std::string fixed_frame =
+      "odom";                   ///< frame of the grid and of the filter's poses (REP 105 odom), non-empty
+  bool lazy = true;             ///< subscribe only while someone listens
+  int queue_size = 5;           ///< clouds waiting for their tf (>= 1)
+  double expected_rate = 10.0;  ///< scan rate for the diagnostics [Hz] (> 0)
   DynamicGridConfig filter;
 
   /// Reads, validates; `unknown` (when given) receives a warning per unknown parameter name.
@@ -269,6 +270,7 @@ void visitParams(GridProjectionParams& p, Visitor& v)
 {
   v("ground_frame", p.ground_frame);
   v("ground_height", p.ground_height);
+  v("ground_from_grid", p.projection.ground_from_grid);
   v("max_grid_age", p.max_grid_age);
   v("grid_sync_tolerance", p.grid_sync_tolerance);
   v("image_cache_size", p.image_cache_size);
