@@ -1,9 +1,10 @@
 #include "grid_vision_fusion/fusion/fusion.h"
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -56,6 +57,16 @@ std::vector<std::size_t> depthOrder(const std::vector<Detection>& detections)
                      return da.score > db.score;
                    });
   return order;
+}
+
+/// The object of a box whose band holds no point: motion unknown, no position yet.
+FusedObject unsupportedObject(std::size_t detection_index)
+{
+  FusedObject object;
+  object.detection_index = detection_index;
+  object.support = ObjectSupport::kBox;
+  object.x = object.y = object.median_x = object.median_y = std::numeric_limits<double>::quiet_NaN();
+  return object;
 }
 
 FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& box,
@@ -357,15 +368,82 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
 
   for (std::size_t d = 0; d < detections.size(); ++d)
   {
-    if (!members[d].empty())
+    if (members[d].empty())
+    {
+      result.objects.push_back(unsupportedObject(d));
+    }
+    else
     {
       static const std::vector<Eigen::Vector2d> kNone;
       result.objects.push_back(pointwiseFeatures(d, detections[d].box, members[d], points, config,
                                                  d < expected.size() ? expected[d] : kNone));
-      result.objects.back().id = static_cast<std::uint32_t>(result.objects.size() - 1);
     }
+    result.objects.back().id = static_cast<std::uint32_t>(d);
   }
   return result;
+}
+
+bool ImageGround::valid() const
+{
+  return grid_to_image.allFinite() && std::isfinite(ground_z) &&
+         std::abs(grid_to_image.leftCols<3>().determinant()) > 1e-12;
+}
+
+Eigen::Vector2d ImageGround::cameraPosition() const
+{
+  const Eigen::Matrix3d a = grid_to_image.leftCols<3>();
+  return (-a.inverse() * grid_to_image.col(3)).head<2>();
+}
+
+Eigen::Vector2d ImageGround::groundPoint(double u, double v, double max_range) const
+{
+  const Eigen::Matrix3d a = grid_to_image.leftCols<3>();
+  const Eigen::Vector3d centre = -a.inverse() * grid_to_image.col(3);
+  Eigen::Vector3d ray = a.inverse() * Eigen::Vector3d(u, v, 1.0);
+  if (a.row(2).dot(ray) < 0.0)
+  {
+    ray = -ray;  // the line of sight in front of the camera
+  }
+  const Eigen::Vector2d level = ray.head<2>();
+  if (ray.z() < 0.0)
+  {
+    const Eigen::Vector3d hit = centre + (ground_z - centre.z()) / ray.z() * ray;
+    if ((hit - centre).head<2>().norm() <= max_range)
+    {
+      return hit.head<2>();
+    }
+  }
+  return level.norm() > 0.0 ? Eigen::Vector2d(centre.head<2>() + max_range * level.normalized())
+                            : Eigen::Vector2d(centre.head<2>());
+}
+
+void placeOnGround(FusionResult& result, const std::vector<Detection>& detections, const ImageGround& ground,
+                   const std::map<std::string, Footprint>& footprints)
+{
+  if (!ground.valid())
+  {
+    return;
+  }
+  const Eigen::Vector2d camera = ground.cameraPosition();
+  for (FusedObject& object : result.objects)
+  {
+    if (object.support != ObjectSupport::kBox)
+    {
+      continue;
+    }
+    const Detection& detection = detections.at(object.detection_index);
+    const BoundingBox& box = detection.box;
+    const Eigen::Vector2d foot =
+        ground.groundPoint(0.5 * (box.x_min + box.x_max), box.y_max, kMaxBoxGroundRange);
+    const auto footprint = footprints.find(detection.label);
+    const double depth =
+        footprint == footprints.end() ? 0.0 : 0.25 * (footprint->second.length + footprint->second.width);
+    const Eigen::Vector2d sight = foot - camera;
+    const Eigen::Vector2d centre =
+        sight.norm() > 0.0 ? Eigen::Vector2d(foot + depth * sight.normalized()) : foot;
+    object.x = object.median_x = centre.x();
+    object.y = object.median_y = centre.y();
+  }
 }
 
 std::string checkFusionInputs(const std::vector<Detection>& detections, std::uint32_t detections_width,

@@ -221,8 +221,7 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
     const double dim_a = length_along_a ? footprint->length : footprint->width;
     const double dim_b = length_along_a ? footprint->width : footprint->length;
     covers_more = extent_a > dim_a || extent_b > dim_b;
-    estimate.length_yaw = estimate.yaw + (length_along_a ? 0.0 : 0.5 * kPi);
-    estimate.hidden_length = std::max(0.0, footprint->length - (length_along_a ? extent_a : extent_b));
+    estimate.length = std::max(footprint->length, length_along_a ? extent_a : extent_b);
     a_centre = axisCentre(e.a_lo, e.a_hi, a_cam, dim_a);
     b_centre = axisCentre(e.b_lo, e.b_hi, b_cam, dim_b);
     estimate.source = CentreSource::kCompleted;
@@ -230,7 +229,7 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
   else
   {
     estimate.source = CentreSource::kExtent;
-    estimate.length_yaw = estimate.yaw + (e.a_hi - e.a_lo >= e.b_hi - e.b_lo ? 0.0 : 0.5 * kPi);
+    estimate.length = std::max(e.a_hi - e.a_lo, e.b_hi - e.b_lo);
     covers_more = false;
   }
   estimate.x = c * a_centre - s * b_centre;
@@ -442,6 +441,10 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
                                   std::to_string(object.detection_index) + " outside the " +
                                   std::to_string(detections.size()) + " detections");
     }
+    if (object.members.empty())
+    {
+      continue;  // no cell: placeOnGround() places it
+    }
     const Detection& detection = detections[object.detection_index];
     const auto footprint = config.footprints.find(detection.label);
     const Footprint* size = footprint == config.footprints.end() ? nullptr : &footprint->second;
@@ -452,8 +455,7 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
             : centreOfCluster(points, object.cluster, camera_x, camera_y, size, config.max_scans_since_hit);
     object.x = centre.x;
     object.y = centre.y;
-    object.length_yaw = centre.length_yaw;
-    object.hidden_length = centre.hidden_length;
+    object.length = centre.length;
   }
 }
 

@@ -27,26 +27,15 @@ void requirePositive(const char* name, double value)
 
 /// A box edge this close to the image's left or right edge [px] cuts the object.
 constexpr float kTruncationMarginPx = 1.F;
+/// The same as a share of the image width, for a trained detector whose box edges stop a few
+/// pixels short of the image's (YOLOv5s at 640 px on KITTI's 1242 px: up to 7 px, 0.6 %).
+constexpr float kTruncationMargin = 0.01F;
 
 /// How far back the lidar hits of a track's objects are registered [s]: three scans at 10 Hz,
 /// in which an object at 1 m/s moves 1.5 cells of 0.2 m (doc/nodelets/fusion.md, "Motion model").
 constexpr double kRegistrationSpan = 0.3;
 /// Slack on that span for stamps that jitter [s].
 constexpr double kRegistrationSlack = 0.02;
-
-/// What a box cut by the image edge adds to its centre's noise [m²]: along the object's length
-/// the centre is the visible part's, off by up to half the length its cells miss. Zero for a box
-/// that is not cut.
-Eigen::Matrix2d cutNoise(const TrackObservation& observation)
-{
-  if (!observation.truncated)
-  {
-    return Eigen::Matrix2d::Zero();
-  }
-  const Eigen::Vector2d length(std::cos(observation.length_yaw), std::sin(observation.length_yaw));
-  const double offset = 0.5 * observation.hidden_length;
-  return offset * offset * length * length.transpose();
-}
 
 /// Drops from `hits` (oldest first, each with a `stamp` [s]) those older than the registration's
 /// span before `stamp_s` [s].
@@ -156,6 +145,22 @@ void Tracker::reset()
   tracks_.clear();
   scene_hits_.clear();
   has_stamp_ = false;
+  last_camera_ = Eigen::Vector2d::Constant(kUnknownSpeed);
+  camera_speed_ = kUnknownSpeed;
+}
+
+Eigen::Matrix2d Tracker::cutNoise(const TrackObservation& observation) const
+{
+  if (!observation.truncated)
+  {
+    return Eigen::Matrix2d::Zero();
+  }
+  // The image edge sweeps along a standing object as fast as the camera moves: over the span the
+  // hits are registered across, that far; a camera that stands still shows a fixed window of it.
+  const double half = 0.5 * observation.length;
+  const double offset =
+      std::isfinite(camera_speed_) ? std::min(half, camera_speed_ * kRegistrationSpan) : half;
+  return offset * offset * Eigen::Matrix2d::Identity();
 }
 
 double Tracker::positionDistance2(const Track& track, const TrackObservation& observation) const
@@ -264,17 +269,23 @@ TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
   e.speed_sigma = track.motion.speedSigma();
   e.hits = track.hits;
   e.age = stamp_s - track.first_stamp;
+  e.located = track.located;
   return e;
 }
 
 std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<TrackObservation>& observations,
-                                           std::vector<Eigen::Vector2d> scene_hits)
+                                           std::vector<Eigen::Vector2d> scene_hits,
+                                           const Eigen::Vector2d& camera)
 {
   if (has_stamp_ && (stamp_s < last_stamp_ || stamp_s - last_stamp_ > config_.max_gap))
   {
     reset();
   }
   const double dt = has_stamp_ ? stamp_s - last_stamp_ : 0.0;
+  camera_speed_ = dt > 0.0 && camera.allFinite() && last_camera_.allFinite()
+                      ? (camera - last_camera_).norm() / dt
+                      : kUnknownSpeed;
+  last_camera_ = camera;
   has_stamp_ = true;
   last_stamp_ = stamp_s;
   for (Track& track : tracks_)
@@ -318,38 +329,100 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
 
 std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>& observations) const
 {
-  const double gate2 = config_.gate_sigma * config_.gate_sigma;
-  CostMatrix cost(tracks_.size(), observations.size());
-  for (std::size_t t = 0; t < tracks_.size(); ++t)
+  // The objects with cells first, as if the others were not there; then those without cells
+  // (only a box to go by) take the tracks left over, so that they never take a track from an
+  // object its cells would have kept it for.
+  std::vector<std::size_t> match(tracks_.size(), kUnassigned);
+  for (const bool supported : {true, false})
   {
-    const Track& track = tracks_[t];
+    std::vector<std::size_t> rows;
+    std::vector<std::size_t> cols;
+    for (std::size_t t = 0; t < tracks_.size(); ++t)
+    {
+      if (match[t] == kUnassigned)
+      {
+        rows.push_back(t);
+      }
+    }
     for (std::size_t o = 0; o < observations.size(); ++o)
     {
-      const TrackObservation& obs = observations[o];
+      if (observations[o].supported == supported)
+      {
+        cols.push_back(o);
+      }
+    }
+    const std::vector<std::size_t> part = solveAssignment(associationCost(observations, rows, cols));
+    for (std::size_t r = 0; r < rows.size(); ++r)
+    {
+      if (part[r] != kUnassigned)
+      {
+        match[rows[r]] = cols[part[r]];
+      }
+    }
+  }
+  return match;
+}
+
+CostMatrix Tracker::associationCost(const std::vector<TrackObservation>& observations,
+                                    const std::vector<std::size_t>& rows,
+                                    const std::vector<std::size_t>& cols) const
+{
+  const double gate2 = config_.gate_sigma * config_.gate_sigma;
+  CostMatrix cost(rows.size(), cols.size());
+  for (std::size_t r = 0; r < rows.size(); ++r)
+  {
+    const Track& track = tracks_[rows[r]];
+    for (std::size_t c = 0; c < cols.size(); ++c)
+    {
+      const TrackObservation& obs = observations[cols[c]];
       if (groupOf(obs.label) != track.group)
       {
         continue;
       }
-      const double d2 = positionDistance2(track, obs);
+      // An object without cells has only its box's rough position: its box alone admits it.
+      const double d2 = obs.supported && track.located ? positionDistance2(track, obs) : gate2;
       const double iou = boxOverlap(obs.box, track.box);
-      if (!(d2 <= gate2) && !(iou >= config_.min_iou))
+      if (!(d2 < gate2) && !(iou >= config_.min_iou))
       {
         continue;
       }
       // A pair admitted by its overlap alone costs as much as one at the edge of the gate.
-      cost.at(t, o) = std::min(d2, gate2) / gate2 + config_.iou_weight * (1.0 - iou);
+      cost.at(r, c) = std::min(d2, gate2) / gate2 + config_.iou_weight * (1.0 - iou);
     }
   }
-  return solveAssignment(cost);
+  return cost;
 }
 
 void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
+{
+  // A located track's object without cells keeps the track alive and its box for the association,
+  // and is otherwise a miss: the motion model only predicts, and what the track expects of the
+  // next image (its filtered box, its cells moved on) comes from its last image with cells.
+  const bool coasting = !obs.supported && track.located;
+  if (!coasting)
+  {
+    if (obs.supported)
+    {
+      track.located ? updateMotion(track, obs) : locate(track, obs);
+    }
+    track.box_filter = filteredBox(track, obs.box, last_stamp_);
+    track.last_seen = last_stamp_;
+  }
+  track.label_votes[obs.label] += obs.score;
+  track.label_classes[obs.label] = obs.class_id;
+  track.box = obs.box;
+  ++track.hits;
+  track.misses = 0;
+  track.confirmed = track.confirmed || track.hits >= config_.min_hits;
+}
+
+void Tracker::updateMotion(Track& track, const TrackObservation& obs) const
 {
   const Eigen::Vector2d centre(obs.x, obs.y);
   // A track seen once has no estimate for its centre to jump from, only one centre and no
   // velocity: its second centre, wherever it lies, is its first step (a car at 20 m/s moves 2 m
   // between two images, beyond the gate of the prior speed).
-  const bool first_step = track.hits == 1;
+  const bool first_step = track.centres == 1;
   if (!first_step && !(positionDistance2(track, obs) <= config_.gate_sigma * config_.gate_sigma))
   {
     // Admitted by its box alone: the centre estimate jumped (a partly hidden object, another
@@ -365,14 +438,18 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
   track.motion.updateGrid(obs.grid);
   registerHits(track, obs);
   track.cells = obs.cells;
-  track.box_filter = filteredBox(track, obs.box, last_stamp_);
-  track.last_seen = last_stamp_;
-  track.label_votes[obs.label] += obs.score;
-  track.label_classes[obs.label] = obs.class_id;
-  track.box = obs.box;
-  ++track.hits;
-  track.misses = 0;
-  track.confirmed = track.confirmed || track.hits >= config_.min_hits;
+  ++track.centres;
+}
+
+void Tracker::locate(Track& track, const TrackObservation& obs) const
+{
+  track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
+  track.motion.updateGrid(obs.grid);
+  track.recent_hits = hitsBefore(obs, track.motion);
+  registerHits(track, obs);
+  track.cells = obs.cells;
+  track.located = true;
+  track.centres = 1;
 }
 
 void Tracker::registerHits(Track& track, const TrackObservation& obs) const
@@ -399,15 +476,14 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   track.box_filter.edges = edgesOf(obs.box);
   track.label_votes[obs.label] = obs.score;
   track.label_classes[obs.label] = obs.class_id;
-  track.cells = obs.cells;
   track.last_seen = stamp_s;
   track.hits = 1;
   track.confirmed = config_.min_hits <= 1;
   track.first_stamp = stamp_s;
-  track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
-  track.motion.updateGrid(obs.grid);
-  track.recent_hits = hitsBefore(obs, track.motion);
-  registerHits(track, obs);
+  if (obs.supported)
+  {
+    locate(track, obs);
+  }
   return track;
 }
 
@@ -445,11 +521,13 @@ std::deque<Tracker::ObservedHits> Tracker::hitsBefore(const TrackObservation& ob
 }
 
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result)
+                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
+                  const Eigen::Vector2d& camera)
 {
   std::vector<TrackObservation> observations;
   observations.reserve(result.objects.size());
-  const float right_edge = static_cast<float>(image_width) - kTruncationMarginPx;
+  const float margin = std::max(kTruncationMarginPx, kTruncationMargin * static_cast<float>(image_width));
+  const float right_edge = static_cast<float>(image_width) - margin;
   for (const FusedObject& object : result.objects)
   {
     const Detection& detection = detections.at(object.detection_index);
@@ -460,10 +538,10 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     o.box = detection.box;
     o.x = object.x;
     o.y = object.y;
-    o.truncated = detection.box.x_min <= kTruncationMarginPx || detection.box.x_max >= right_edge;
-    o.length_yaw = object.length_yaw;
-    o.hidden_length = object.hidden_length;
+    o.truncated = detection.box.x_min <= margin || detection.box.x_max >= right_edge;
+    o.length = object.length;
     o.grid = object.grid;
+    o.supported = object.support == ObjectSupport::kCells;
     o.cells.reserve(object.cluster.size());
     for (std::uint32_t i : object.cluster)
     {
@@ -485,7 +563,8 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
       scene_hits.emplace_back(points.x[i], points.y[i]);
     }
   }
-  const std::vector<TrackEstimate> estimates = tracker.update(stamp_s, observations, std::move(scene_hits));
+  const std::vector<TrackEstimate> estimates =
+      tracker.update(stamp_s, observations, std::move(scene_hits), camera);
   for (std::size_t i = 0; i < result.objects.size(); ++i)
   {
     FusedObject& object = result.objects[i];
@@ -494,6 +573,15 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     object.label = track.label;
     object.class_id = track.class_id;
     object.track_state = track.confirmed ? TrackState::kConfirmed : TrackState::kTentative;
+    if (object.support != ObjectSupport::kCells)
+    {
+      // No cell says anything about its motion in this image: its track's prediction, or its box.
+      object.support = track.located ? ObjectSupport::kTrack : ObjectSupport::kBox;
+      object.p_dynamic = track.located ? track.p_dynamic : 0.5;
+      object.x = track.located ? track.x : object.x;
+      object.y = track.located ? track.y : object.y;
+      continue;
+    }
     object.p_dynamic = track.p_dynamic;
     object.motion = track.motion;
     object.x = track.x;

@@ -228,6 +228,14 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
                           detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
                           pair.tracks_reset.c_str());
   }
+  if (pair.unplaced > 0)
+  {
+    NODELET_WARN_THROTTLE(
+        kThrottleS,
+        "fusion: %zu boxes without grid cells left out at t=%.3f: %s carries no grid_to_image "
+        "(a producer older than the field), so nothing says where they stand",
+        pair.unplaced, detections_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str());
+  }
   const std::vector<Detection>& detections = pair.detections;
   const FusionResult& result = pair.result;
   const ProjectedPointsView points = viewOf(*grid_msg);

@@ -97,6 +97,20 @@ ProjectedPointsView viewOf(const ProjectedGrid& msg)
   return pointsViewOf(msg);
 }
 
+ImageGround imageGroundOf(const ProjectedGrid& msg)
+{
+  ImageGround ground;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      ground.grid_to_image(r, c) = msg.grid_to_image[static_cast<std::size_t>(4 * r + c)];
+    }
+  }
+  ground.ground_z = msg.ground_z;
+  return ground;
+}
+
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,
                                       const std::vector<Detection>& detections, const FusionResult& result)
 {
@@ -116,6 +130,7 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
     out.motion = static_cast<std::uint8_t>(object.motion);
     out.p_dynamic = static_cast<float>(object.p_dynamic);
     out.track_state = static_cast<std::uint8_t>(object.track_state);
+    out.position_source = static_cast<std::uint8_t>(object.support);
     out.static_points = object.static_points;
     out.dynamic_points = object.dynamic_points;
     out.position.x = object.x;

@@ -1,5 +1,6 @@
 #include "grid_vision_fusion/ros_stages/fusion_stage.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "grid_vision_fusion/ros/fusion_conversions.h"
@@ -63,6 +64,20 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     estimateCentres(pair.result, fused, points, grid.camera_position.x, grid.camera_position.y,
                     params_.fusion.centre);
   }
+  const ImageGround ground = imageGroundOf(grid);
+  if (ground.valid())
+  {
+    placeOnGround(pair.result, fused, ground, params_.fusion.centre.footprints);
+  }
+  else
+  {
+    auto& objects = pair.result.objects;
+    const auto unplaced =
+        std::remove_if(objects.begin(), objects.end(),
+                       [](const FusedObject& object) { return object.support != ObjectSupport::kCells; });
+    pair.unplaced = static_cast<std::size_t>(objects.end() - unplaced);
+    objects.erase(unplaced, objects.end());
+  }
   if (params_.tracking)
   {
     const double gap = stamp - last_stamp_;
@@ -77,7 +92,8 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
     }
     has_stamp_ = true;
     last_stamp_ = stamp;
-    trackObjects(tracker_, stamp, pair.detections, detections.image_width, points, pair.result);
+    trackObjects(tracker_, stamp, pair.detections, detections.image_width, points, pair.result,
+                 Eigen::Vector2d(grid.camera_position.x, grid.camera_position.y));
   }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
   return pair;

@@ -96,6 +96,15 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
   msg->camera_position.x = camera_position.x();
   msg->camera_position.y = camera_position.y();
   msg->camera_position.z = camera_position.z();
+  const Eigen::Matrix<double, 3, 4> grid_to_image = camera->projection() * geometry.camera_from_grid.matrix();
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      msg->grid_to_image[static_cast<std::size_t>(4 * r + c)] = grid_to_image(r, c);
+    }
+  }
+  msg->ground_z = static_cast<float>(geometry.ground_z);
   return msg;
 }
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "grid_vision_fusion/fusion/fusion.h"
@@ -143,20 +144,81 @@ TEST(DecideMotion, LargerCardinalityTiesAndMinimum)
   EXPECT_EQ(decideMotion(1, 4, config), Motion::kDynamic);  // winner 4 >= 4
 }
 
-TEST(Fuse, EmptyRegionIsDiscarded)
+TEST(Fuse, EmptyRegionGivesAnObjectWithoutSupport)
 {
   ProjectedPoints pts;
   addStatic(pts, 150.F, 120.F, 10.F, 0.F);  // inside the box, above the band
   addStatic(pts, 300.F, 180.F, 10.F, 0.F);  // right of the box
   const FusionResult result = fuse({kBox}, pts.view(), paperRule());
-  EXPECT_TRUE(result.objects.empty());
+  ASSERT_EQ(result.objects.size(), 1U);
+  const FusedObject& object = result.objects[0];
+  EXPECT_EQ(object.support, ObjectSupport::kBox);
+  EXPECT_EQ(object.motion, Motion::kUnknown);
+  EXPECT_EQ(object.static_points + object.dynamic_points, 0U);
+  EXPECT_DOUBLE_EQ(object.p_dynamic, 0.5);
+  EXPECT_TRUE(std::isnan(object.x)) << "placeOnGround() gives it a position";
   EXPECT_EQ(result.invalid_points, 0U);
 }
 
 TEST(Fuse, NoDetectionsAndNoPoints)
 {
   EXPECT_TRUE(fuse({}, ProjectedPoints{}.view(), FusionConfig{}).objects.empty());
-  EXPECT_TRUE(fuse({kBox}, ProjectedPoints{}.view(), FusionConfig{}).objects.empty());
+  const FusionResult result = fuse({kBox, kBox}, ProjectedPoints{}.view(), FusionConfig{});
+  ASSERT_EQ(result.objects.size(), 2U);
+  EXPECT_EQ(result.objects[1].id, 1U);
+  EXPECT_EQ(result.objects[1].detection_index, 1U);
+}
+
+// A camera 1.5 m above the ground plane z = 0 at the origin of the grid frame, looking along +x
+// (x forward, y left, z up in the grid frame; x right, y down, z forward in the camera's), focal
+// length 500 px, principal point (320, 240).
+ImageGround levelCamera()
+{
+  Eigen::Matrix<double, 3, 4> k_rt;
+  k_rt << 320.0, -500.0, 0.0, 0.0,  // u = 320 - 500 y / x
+      240.0, 0.0, -500.0, 750.0,    // v = 240 - 500 (z - 1.5) / x
+      1.0, 0.0, 0.0, 0.0;           // w = x
+  ImageGround ground;
+  ground.grid_to_image = k_rt;
+  ground.ground_z = 0.0;
+  return ground;
+}
+
+TEST(ImageGround, LineOfSightMeetsTheGroundOrTheRangeLimit)
+{
+  const ImageGround ground = levelCamera();
+  ASSERT_TRUE(ground.valid());
+  EXPECT_TRUE(ground.cameraPosition().isZero(1e-12));
+  // v = 240 + 750 / x: the bottom edge at v = 315 looks at the ground 10 m ahead; u = 370 is
+  // 50 px right of the centre: y = -50 x / 500 = -1 m.
+  const Eigen::Vector2d foot = ground.groundPoint(370.0, 315.0, 150.0);
+  EXPECT_NEAR(foot.x(), 10.0, 1e-9);
+  EXPECT_NEAR(foot.y(), -1.0, 1e-9);
+  // On the horizon (v = 240) or above it the line never meets the ground: the range limit
+  // along its horizontal direction.
+  const Eigen::Vector2d far = ground.groundPoint(320.0, 200.0, 150.0);
+  EXPECT_NEAR(far.x(), 150.0, 1e-9);
+  EXPECT_NEAR(far.y(), 0.0, 1e-9);
+  // Just below the horizon, beyond the limit: the limit.
+  EXPECT_NEAR(ground.groundPoint(320.0, 241.0, 150.0).x(), 150.0, 1e-9);
+  EXPECT_FALSE(ImageGround{}.valid()) << "all zeros: the projected grid did not carry it";
+}
+
+TEST(PlaceOnGround, BoxWithoutCellsStandsOnTheGroundBehindItsBottomEdge)
+{
+  const Detection car = makeDetection(300.F, 200.F, 340.F, 315.F, "car");
+  ProjectedPoints pts;
+  addStatic(pts, 150.F, 170.F, 7.F, 1.F);  // kBox's cell
+  FusionResult result = fuse({kBox, car}, pts.view(), paperRule());
+  ASSERT_EQ(result.objects.size(), 2U);
+  result.objects[0].x = 7.0;  // as estimateCentres() leaves it
+  const std::map<std::string, Footprint> footprints{{"car", {3.9, 1.6}}};
+  placeOnGround(result, {kBox, car}, levelCamera(), footprints);
+  EXPECT_DOUBLE_EQ(result.objects[0].x, 7.0) << "an object with cells keeps its position";
+  // The bottom centre (320, 315) looks at (10, 0); half the mean of 3.9 and 1.6 m beyond it.
+  EXPECT_NEAR(result.objects[1].x, 10.0 + 0.25 * (3.9 + 1.6), 1e-9);
+  EXPECT_NEAR(result.objects[1].y, 0.0, 1e-9);
+  EXPECT_EQ(result.objects[1].support, ObjectSupport::kBox);
 }
 
 TEST(Fuse, OnlyStaticPointsOddMedian)
@@ -310,8 +372,10 @@ TEST(Fuse, ExclusiveTieOnBottomGoesToHigherScore)
   FusionConfig config = paperRule();
   config.exclusive_assignment = true;
   const FusionResult result = fuse({low_score, high_score}, pts.view(), config);
-  ASSERT_EQ(result.objects.size(), 1U);
-  EXPECT_EQ(result.objects[0].detection_index, 1U);
+  ASSERT_EQ(result.objects.size(), 2U);
+  EXPECT_EQ(result.objects[0].support, ObjectSupport::kBox) << "the point went to the other box";
+  EXPECT_EQ(result.objects[1].detection_index, 1U);
+  EXPECT_EQ(result.objects[1].static_points, 1U);
 }
 
 TEST(Fuse, NaNCoordinatesAreIgnored)

@@ -9,6 +9,7 @@
 
 #include <cmath>
 
+#include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/projection_conversions.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
 #include "grid_vision_fusion/ros_stages/detector_stage.h"
@@ -65,16 +66,16 @@ TEST(GridStage, UpdatesFromTfAndPublishesInTheFixedFrame)
   params.filter.particle_count = 1 << 12;
   GridStage stage(params);
   tf2::BufferCore tf;
-  tf.setTransform(transform("world", "velo_link", 5.0, 1.73, kStamp), "test", true);
+  tf.setTransform(transform("odom", "velo_link", 5.0, 1.73, kStamp), "test", true);
 
   const DynamicGridCycle cycle = stage.update(wallCloud("velo_link"), tf);
   EXPECT_EQ(cycle.sensor.points, 200U);
   const DynamicGrid::Ptr grid = stage.gridMsg();
-  EXPECT_EQ(grid->header.frame_id, "world");
+  EXPECT_EQ(grid->header.frame_id, "odom");
   EXPECT_EQ(grid->header.stamp, kStamp);
   EXPECT_EQ(grid->p_static.size(), static_cast<std::size_t>(params.filter.width * params.filter.height));
   EXPECT_EQ(stage.occupancyMsg()->header.stamp, kStamp);
-  EXPECT_EQ(stage.cellsMsg()->header.frame_id, "world");
+  EXPECT_EQ(stage.cellsMsg()->header.frame_id, "odom");
   // The cells' ages: 0 where the wall's points fell (x = 15 m in the world: the cell before or
   // after that edge), 255 where no point ever did; one scan later, the wall 2 m farther, 1.
   ASSERT_EQ(grid->scans_since_hit.size(), grid->p_static.size());
@@ -86,9 +87,19 @@ TEST(GridStage, UpdatesFromTfAndPublishesInTheFixedFrame)
   };
   EXPECT_EQ(std::min(ageAt(*grid, 14.9, 0.1), ageAt(*grid, 15.1, 0.1)), 0);
   EXPECT_EQ(ageAt(*grid, 25.1, 5.1), 255);
+  // The ground under each cell as the scan shows it: the wall's ground points lie 1.73 m below
+  // the lidar, at z = 0 of odom; beyond the sensor model's range it is unknown.
+  ASSERT_EQ(grid->ground_z.size(), grid->p_static.size());
+  const auto groundAt = [](const DynamicGrid& g, double x, double y)
+  {
+    const auto col = static_cast<std::size_t>((x - g.info.origin.position.x) / g.info.resolution);
+    const auto row = static_cast<std::size_t>((y - g.info.origin.position.y) / g.info.resolution);
+    return g.ground_z.at(row * g.info.width + col);
+  };
+  EXPECT_NEAR(groundAt(*grid, 10.1, 0.1), 0.0, 1e-3);
   sensor_msgs::PointCloud2 farther = wallCloud("velo_link", 12.0F);
   farther.header.stamp = kStamp + ros::Duration(0.1);
-  tf.setTransform(transform("world", "velo_link", 5.0, 1.73, farther.header.stamp), "test", true);
+  tf.setTransform(transform("odom", "velo_link", 5.0, 1.73, farther.header.stamp), "test", true);
   stage.update(farther, tf);
   const DynamicGrid::Ptr later = stage.gridMsg();
   EXPECT_EQ(std::min(ageAt(*later, 14.9, 0.1), ageAt(*later, 15.1, 0.1)), 1);
@@ -158,6 +169,18 @@ TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
   aged.scans_since_hit.resize(15);
   EXPECT_NE(checkDynamicGrid(aged).find("scans_since_hit has 15"), std::string::npos)
       << checkDynamicGrid(aged);
+  DynamicGrid grounded = grid;
+  grounded.ground_z.assign(3, 0.0F);
+  EXPECT_NE(checkDynamicGrid(grounded).find("ground_z has 3"), std::string::npos)
+      << checkDynamicGrid(grounded);
+  // Where the image meets the ground, for the boxes without cells: the world point (10, 2, 0)
+  // lies 10 m ahead and 2 m left, 1.5 m below the camera: u = 320 - 500 * 2 / 10, v = 240 + 75.
+  const ImageGround ground = imageGroundOf(*projected);
+  ASSERT_TRUE(ground.valid());
+  EXPECT_DOUBLE_EQ(projected->ground_z, 0.0F);
+  const Eigen::Vector2d foot = ground.groundPoint(220.0, 315.0, 150.0);
+  EXPECT_NEAR(foot.x(), 10.0, 1e-6);
+  EXPECT_NEAR(foot.y(), 2.0, 1e-6);
 
   DynamicGrid old_grid = grid;
   old_grid.header.stamp = kStamp - ros::Duration(2.0);

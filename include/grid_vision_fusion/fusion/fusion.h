@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,14 @@ enum class PositionSource
 PositionSource positionSourceFromString(const std::string& name);
 /// The name parsed by positionSourceFromString().
 std::string toString(PositionSource source);
+
+/// What an object's position and motion rest on in an image.
+enum class ObjectSupport : std::uint8_t
+{
+  kCells = 0,  ///< grid cells in its fusion band: motion and position from them (and its track)
+  kTrack = 1,  ///< no cell in its band (or its box lies beyond the grid): its track's prediction
+  kBox = 2,    ///< no cell and no track that knows where it is: its box's bottom on the ground
+};
 
 /// Which cells of a fusion region vote for its motion.
 enum class MotionVote
@@ -133,15 +142,16 @@ struct FusedObject
   double vx = 0.0;                   ///< median vx of the vote's dynamic points [m/s]; 0 unless kDynamic
   double vy = 0.0;                   ///< median vy of the vote's dynamic points [m/s]; 0 unless kDynamic
   double heading = 0.0;              ///< atan2(vy, vx) [rad]; 0 unless kDynamic
-  /// Direction of the object's length [rad] and how much of it its cells miss [m]
-  /// (CentreEstimate::length_yaw, hidden_length), set by estimateCentres(): where a box is cut
-  /// by the image edge, the centre is that uncertain along that axis.
-  double length_yaw = 0.0;
-  double hidden_length = 0.0;
+  /// The object's length [m] (CentreEstimate::length), set by estimateCentres(): where its box is
+  /// cut by the image edge, how far its centre may lie off the estimate.
+  double length = 0.0;
   /// What the grid says about the object's motion, from the cells of its cluster (gridEvidence()).
   GridMotionEvidence grid;
   /// P(dynamic), [0, 1]: the track's (tracked), else the vote's dynamic share d / (s + d).
   double p_dynamic = 0.5;
+  /// What its position and motion rest on: kCells when its band holds grid points; otherwise its
+  /// motion is kUnknown and its position comes from its box (placeOnGround()) or its track.
+  ObjectSupport support = ObjectSupport::kCells;
   /// Tracked only: whether the object's track is tentative or confirmed.
   TrackState track_state = TrackState::kNone;
   /// Tracked only: the track's label (the one its objects had most often) and its detector class
@@ -155,7 +165,7 @@ struct FusedObject
   double speed() const;
 };
 
-/// Result of fuse(): one object per non-empty region, in detection order.
+/// Result of fuse(): one object per detection, in detection order.
 struct FusionResult
 {
   std::vector<FusedObject> objects;
@@ -184,8 +194,9 @@ Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, c
 /// Fuses the detector boxes with the projected grid points: builds the fusion region of every
 /// box, collects the valid points inside it and computes its point-wise features (position:
 /// the median of the region, whatever config.position says; motion and velocity from the cells
-/// config.motion_vote names). Regions without any point are discarded; ids
-/// are 0, 1, 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
+/// config.motion_vote names). A region without any point still gives its object, with motion
+/// kUnknown, support kBox and no position yet (NaN: placeOnGround() gives it one); ids are 0, 1,
+/// 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
 /// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
 /// `expected` (empty, or one list per detection): the cells the detection's track expects
 /// (Tracker::priors()), which objectCluster() prefers.
@@ -201,6 +212,36 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
 void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
                      const ProjectedPointsView& points, double camera_x, double camera_y,
                      const CentreConfig& config);
+
+/// Where an image's pixels meet the ground: the grid frame → pixel matrix P · (camera ← grid) at
+/// the image stamp (a grid-frame point X lands on w·(u, v, 1)ᵀ = M·(X, 1)ᵀ, w > 0 in front of the
+/// camera) and the z of the ground plane in the grid frame [m].
+struct ImageGround
+{
+  Eigen::Matrix<double, 3, 4> grid_to_image = Eigen::Matrix<double, 3, 4>::Zero();
+  double ground_z = 0.0;
+
+  /// Whether the matrix is a camera's (finite, its left 3×3 invertible) and ground_z finite.
+  bool valid() const;
+  /// Where the line of sight through pixel (u, v) meets the ground plane (x, y in the grid frame)
+  /// [m]; a line that meets it behind the camera, above the horizon, or farther than `max_range`
+  /// [m] from the camera gives the point at max_range along its horizontal direction.
+  Eigen::Vector2d groundPoint(double u, double v, double max_range) const;
+  /// The camera's optical centre (x, y) in the grid frame [m].
+  Eigen::Vector2d cameraPosition() const;
+};
+
+/// How far from the camera a box without cells is placed at most [m], when its bottom edge looks
+/// at the ground farther away or not at all (above the horizon).
+constexpr double kMaxBoxGroundRange = 150.0;
+
+/// Gives every object of `result` without cells (support kBox) a position from its box: the point
+/// of the ground plane its bottom-centre pixel looks at (ImageGround::groundPoint()), moved along
+/// the line of sight by half the mean of its label's footprint (`footprints`; none: 0), the centre
+/// of an object whose near face stands on the box's bottom edge. Without a valid `ground`, such
+/// objects keep no position (NaN).
+void placeOnGround(FusionResult& result, const std::vector<Detection>& detections, const ImageGround& ground,
+                   const std::map<std::string, Footprint>& footprints);
 
 /// Checks that a detections/points pair can be fused: boxes finite, x_min <= x_max,
 /// y_min <= y_max and inside the image (1 px tolerance), and the image sizes of both inputs

@@ -69,12 +69,10 @@ struct CentreEstimate
   double x = 0.0;    ///< centre x [m], frame of the points
   double y = 0.0;    ///< centre y [m]
   double yaw = 0.0;  ///< orientation of the fitted outline's first axis, [0, π/2) [rad]
-  /// Direction of the object's length [rad]: the outline axis the footprint's length goes along,
-  /// or without a footprint the axis of the cells' larger extent; [0, π).
-  double length_yaw = 0.0;
-  /// How much of the footprint's length the cells do not cover [m], >= 0 (0 without a
-  /// footprint): where the object's view is cut, how far its centre may lie off the estimate.
-  double hidden_length = 0.0;
+  /// The object's length [m]: its footprint's, or the cells' extent along the footprint's length
+  /// axis where they cover more (without a footprint: their larger extent). Where the object's
+  /// view is cut, its visible part, and the centre with it, may lie anywhere along it.
+  double length = 0.0;
   std::size_t cluster_points = 0;  ///< cells it comes from (the cluster's, or its recently hit ones)
   CentreSource source = CentreSource::kCompleted;
 };

@@ -23,10 +23,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/fusion/assignment.h"
 #include "grid_vision_fusion/fusion/fusion.h"
 #include "grid_vision_fusion/fusion/motion_model.h"
 #include "grid_vision_fusion/types.h"
@@ -81,12 +83,12 @@ struct TrackObservation
   BoundingBox box;             ///< the detector box [px]
   double x = 0.0;              ///< observed centre [m], fixed frame
   double y = 0.0;
-  /// The box is cut by the image's left or right edge: its centre follows the visible part,
-  /// which slides along the object's length (direction length_yaw [rad]) as the object leaves
-  /// or enters the view, by up to half the length its cells miss (hidden_length [m]).
+  /// The box is cut by the image's left or right edge: its centre follows the visible part, which
+  /// slides along the object as it leaves or enters the view, by up to the object's `length` [m]
+  /// (CentreEstimate::length; 0: not known). The outline fitted to a short visible part says
+  /// little of the object's axes, so the slide may go any way.
   bool truncated = false;
-  double length_yaw = 0.0;
-  double hidden_length = 0.0;
+  double length = 0.0;
   /// The cells of the object's cluster [m], fixed frame: what the track expects to continue in
   /// the next image (priors()).
   std::vector<Eigen::Vector2d> cells;
@@ -96,6 +98,10 @@ struct TrackObservation
   std::vector<Eigen::Vector2d> hits;
   double cell_size = 0.0;
   GridMotionEvidence grid;  ///< what the grid says about the object's motion
+  /// Whether grid cells support the object (its fusion band holds some): else x, y come from its
+  /// box (NaN when not even that) and say too little to move the track's motion model, which only
+  /// predicts; the track keeps the object (its box, label, hits), and its estimate says so.
+  bool supported = true;
 };
 
 /// What a detection's track expects of it in an image (Tracker::priors()); all empty for a
@@ -131,7 +137,13 @@ struct TrackEstimate
   double speed_sigma = 0.0;  ///< standard deviation of that speed [m/s]
   int hits = 0;              ///< images with an observation, this one included
   double age = 0.0;          ///< time since the track's first observation [s]
+  /// Whether the track has a position of its own: it has had an observation with cells. Without,
+  /// x, y, p_dynamic are the observation's box position and 0.5.
+  bool located = false;
 };
+
+/// "Not known" for a speed or a position: NaN.
+constexpr double kUnknownSpeed = std::numeric_limits<double>::quiet_NaN();
 
 /// The tracker. Deterministic; not thread-safe.
 class Tracker
@@ -147,8 +159,11 @@ public:
   /// [m], fixed frame, on the observations' lattice: an object is hit before it is detected (or
   /// while its detections are missed), so a new track registers its first hits against those of
   /// the scans before around them, from its first image, as a track does its own.
+  /// `camera`: the camera's position in the fixed frame at `stamp_s` [m] (NaN: not known), whose
+  /// speed between images tells how fast the image edge sweeps along what it cuts (cutNoise()).
   std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations,
-                                    std::vector<Eigen::Vector2d> scene_hits = {});
+                                    std::vector<Eigen::Vector2d> scene_hits = {},
+                                    const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kUnknownSpeed));
 
   /// For each detection of an image at `stamp_s` [s], what the track of its label group whose
   /// last box overlaps the detection's box most (by min_iou or more) expects of it: its cells
@@ -203,14 +218,25 @@ private:
     int misses = 0;
     bool confirmed = false;
     double first_stamp = 0.0;
+    bool located = false;  ///< its motion model has started: it has had an observation with cells
+    int centres = 0;       ///< observations with cells since it was located
   };
 
   /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
-  /// optimal assignment.
+  /// optimal assignment, of the observations with cells first, then of those without.
   std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
+  /// The association cost of the tracks `rows` and the observations `cols` (indices).
+  CostMatrix associationCost(const std::vector<TrackObservation>& observations,
+                             const std::vector<std::size_t>& rows,
+                             const std::vector<std::size_t>& cols) const;
   /// A matched track takes its observation: the centre (or a restart there), the grid's evidence,
-  /// the registration of its hits.
+  /// the registration of its hits; an observation without cells only its box and label.
   void updateTrack(Track& track, const TrackObservation& observation) const;
+  /// The motion model of a track without a position of its own starts at `observation` (which
+  /// has cells), with the hits of the scans before.
+  void locate(Track& track, const TrackObservation& observation) const;
+  /// A located track takes an observation with cells into its motion model.
+  void updateMotion(Track& track, const TrackObservation& observation) const;
   /// The registration of the observation's lidar hits against the track's oldest hits within
   /// kRegistrationSpan, into the track's motion model; then the observation's hits join the
   /// track's.
@@ -231,6 +257,12 @@ private:
   /// the association noise position_sigma and, for a box cut by the image edge, its centre's
   /// offset along the object's length: the association gate and the update's gate.
   double positionDistance2(const Track& track, const TrackObservation& observation) const;
+  /// What a box cut by the image edge adds to its centre's noise [m²]: the centre is the visible
+  /// part's, off by up to half the object's length, in a direction the outline of a short visible
+  /// part does not tell, and the edge sweeps along a standing object as fast as the camera moves:
+  /// offset min(half the length, camera speed × kCutSweepTime) in every direction (half the length
+  /// when the camera's speed is not known). Zero for a box that is not cut.
+  Eigen::Matrix2d cutNoise(const TrackObservation& observation) const;
 
   TrackerConfig config_;
   std::vector<Track> tracks_;
@@ -239,6 +271,8 @@ private:
   std::uint32_t next_id_ = 1;
   bool has_stamp_ = false;
   double last_stamp_ = 0.0;
+  Eigen::Vector2d last_camera_ = Eigen::Vector2d::Constant(kUnknownSpeed);  ///< at last_stamp_ [m]
+  double camera_speed_ = kUnknownSpeed;  ///< between the last two images [m/s]; NaN: not known
 };
 
 /// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
@@ -247,9 +281,12 @@ private:
 /// cluster's cells in `points`), and every cell of `points` the lidar hit in the grid's scan is
 /// a hit of the scene (Tracker::update()); every object takes its track's id, state (tentative
 /// or confirmed), P(dynamic), verdict, filtered position and, when dynamic, velocity and heading
-/// (static and unknown ones zero, as the message says). Sets result.tracked.
+/// (static and unknown ones zero, as the message says). An object without cells keeps motion
+/// unknown and takes its track's predicted position when the track has one (support kTrack), else
+/// keeps its box's. Sets result.tracked.
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result);
+                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
+                  const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kUnknownSpeed));
 
 /// Intersection over union of two boxes (continuous pixel coordinates), 0 when disjoint or empty.
 double boxOverlap(const BoundingBox& a, const BoundingBox& b);

@@ -24,6 +24,10 @@ std::string checkProjectedGrid(const ProjectedGrid& msg);
 /// after checkProjectedGrid() returned empty.
 ProjectedPointsView viewOf(const ProjectedGrid& msg);
 
+/// Where the image of `msg` meets the ground (its grid_to_image and ground_z); an invalid
+/// ImageGround when the message does not carry them (all zeros).
+ImageGround imageGroundOf(const ProjectedGrid& msg);
+
 /// The DetectedObjectArray of a fusion result: header.stamp = the image stamp,
 /// header.frame_id = `grid_frame_id`, image_frame_id = the camera frame of `image_header`;
 /// id = FusedObject::id (the index from fuse(), the track id once tracked).

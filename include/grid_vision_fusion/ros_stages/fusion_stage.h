@@ -27,6 +27,9 @@ struct FusedPair
   /// With tracking: why the tracks were dropped before this pair (time going backwards, a gap
   /// above track_max_gap); empty when they were kept.
   std::string tracks_reset;
+  /// Boxes without cells left out because the projected grid does not say where the image meets
+  /// the ground (no grid_to_image: a producer older than the field); 0 otherwise.
+  std::size_t unplaced = 0;
 };
 
 /// The fusion with its parameters, and the tracker that carries the objects from pair to pair.
