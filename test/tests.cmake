@@ -153,6 +153,6 @@ endforeach()
 file(GLOB GVF_FUZZ_HARNESS_SOURCES ${PROJECT_SOURCE_DIR}/fuzz/*/fuzz_*.cpp)
 gvf_gtest(test_fuzz_corpus
   SOURCES test/fuzz/test_fuzz_corpus.cpp ${GVF_FUZZ_HARNESS_SOURCES}
-  LINK grid_vision_fusion_ros grid_vision_fusion_simulation
+  LINK grid_vision_fusion_ros grid_vision_fusion_simulation grid_vision_fusion_evaluation
   DEFINITIONS GVF_FUZZ_CORPUS_TEST)
 target_include_directories(test_fuzz_corpus PRIVATE ${PROJECT_SOURCE_DIR}/fuzz)  # fuzz_input.h

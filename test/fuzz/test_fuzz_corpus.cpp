@@ -27,6 +27,7 @@
   GVF_FUZZ_HARNESS(replay_labels)            \
   GVF_FUZZ_HARNESS(scenario)                 \
   GVF_FUZZ_HARNESS(timestamps)               \
+  GVF_FUZZ_HARNESS(tracking_labels)          \
   GVF_FUZZ_HARNESS(tracklets)
 GVF_FUZZ_HARNESSES
 #undef GVF_FUZZ_HARNESS
