@@ -145,8 +145,8 @@ void Tracker::reset()
   tracks_.clear();
   scene_hits_.clear();
   has_stamp_ = false;
-  last_camera_ = Eigen::Vector2d::Constant(kUnknownSpeed);
-  camera_speed_ = kUnknownSpeed;
+  last_camera_ = Eigen::Vector2d::Constant(kNotKnown);
+  camera_speed_ = kNotKnown;
 }
 
 Eigen::Matrix2d Tracker::cutNoise(const TrackObservation& observation) const
@@ -284,7 +284,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   const double dt = has_stamp_ ? stamp_s - last_stamp_ : 0.0;
   camera_speed_ = dt > 0.0 && camera.allFinite() && last_camera_.allFinite()
                       ? (camera - last_camera_).norm() / dt
-                      : kUnknownSpeed;
+                      : kNotKnown;
   last_camera_ = camera;
   has_stamp_ = true;
   last_stamp_ = stamp_s;
@@ -329,52 +329,14 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
 
 std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>& observations) const
 {
-  // The objects with cells first, as if the others were not there; then those without cells
-  // (only a box to go by) take the tracks left over, so that they never take a track from an
-  // object its cells would have kept it for.
-  std::vector<std::size_t> match(tracks_.size(), kUnassigned);
-  for (const bool supported : {true, false})
+  const double gate2 = config_.gate_sigma * config_.gate_sigma;
+  CostMatrix cost(tracks_.size(), observations.size());
+  for (std::size_t t = 0; t < tracks_.size(); ++t)
   {
-    std::vector<std::size_t> rows;
-    std::vector<std::size_t> cols;
-    for (std::size_t t = 0; t < tracks_.size(); ++t)
-    {
-      if (match[t] == kUnassigned)
-      {
-        rows.push_back(t);
-      }
-    }
+    const Track& track = tracks_[t];
     for (std::size_t o = 0; o < observations.size(); ++o)
     {
-      if (observations[o].supported == supported)
-      {
-        cols.push_back(o);
-      }
-    }
-    const std::vector<std::size_t> part = solveAssignment(associationCost(observations, rows, cols));
-    for (std::size_t r = 0; r < rows.size(); ++r)
-    {
-      if (part[r] != kUnassigned)
-      {
-        match[rows[r]] = cols[part[r]];
-      }
-    }
-  }
-  return match;
-}
-
-CostMatrix Tracker::associationCost(const std::vector<TrackObservation>& observations,
-                                    const std::vector<std::size_t>& rows,
-                                    const std::vector<std::size_t>& cols) const
-{
-  const double gate2 = config_.gate_sigma * config_.gate_sigma;
-  CostMatrix cost(rows.size(), cols.size());
-  for (std::size_t r = 0; r < rows.size(); ++r)
-  {
-    const Track& track = tracks_[rows[r]];
-    for (std::size_t c = 0; c < cols.size(); ++c)
-    {
-      const TrackObservation& obs = observations[cols[c]];
+      const TrackObservation& obs = observations[o];
       if (groupOf(obs.label) != track.group)
       {
         continue;
@@ -387,27 +349,33 @@ CostMatrix Tracker::associationCost(const std::vector<TrackObservation>& observa
         continue;
       }
       // A pair admitted by its overlap alone costs as much as one at the edge of the gate.
-      cost.at(r, c) = std::min(d2, gate2) / gate2 + config_.iou_weight * (1.0 - iou);
+      cost.at(t, o) = std::min(d2, gate2) / gate2 + config_.iou_weight * (1.0 - iou);
     }
   }
-  return cost;
+  return solveAssignment(cost);
 }
 
 void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 {
-  // A located track's object without cells keeps the track alive and its box for the association,
-  // and is otherwise a miss: the motion model only predicts, and what the track expects of the
-  // next image (its filtered box, its cells moved on) comes from its last image with cells.
-  const bool coasting = !obs.supported && track.located;
-  if (!coasting)
+  if (!obs.supported)
   {
-    if (obs.supported)
+    // No cell: the motion model only predicts; the cells the track expects move on with it.
+    const Eigen::Vector2d shift = track.motion.state().tail<2>() * (last_stamp_ - track.last_seen);
+    for (Eigen::Vector2d& cell : track.cells)
     {
-      track.located ? updateMotion(track, obs) : locate(track, obs);
+      cell += shift;
     }
-    track.box_filter = filteredBox(track, obs.box, last_stamp_);
-    track.last_seen = last_stamp_;
   }
+  else if (track.located)
+  {
+    updateMotion(track, obs);
+  }
+  else
+  {
+    locate(track, obs);
+  }
+  track.box_filter = filteredBox(track, obs.box, last_stamp_);
+  track.last_seen = last_stamp_;
   track.label_votes[obs.label] += obs.score;
   track.label_classes[obs.label] = obs.class_id;
   track.box = obs.box;

@@ -28,7 +28,6 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/fusion/assignment.h"
 #include "grid_vision_fusion/fusion/fusion.h"
 #include "grid_vision_fusion/fusion/motion_model.h"
 #include "grid_vision_fusion/types.h"
@@ -143,7 +142,7 @@ struct TrackEstimate
 };
 
 /// "Not known" for a speed or a position: NaN.
-constexpr double kUnknownSpeed = std::numeric_limits<double>::quiet_NaN();
+constexpr double kNotKnown = std::numeric_limits<double>::quiet_NaN();
 
 /// The tracker. Deterministic; not thread-safe.
 class Tracker
@@ -163,7 +162,7 @@ public:
   /// speed between images tells how fast the image edge sweeps along what it cuts (cutNoise()).
   std::vector<TrackEstimate> update(double stamp_s, const std::vector<TrackObservation>& observations,
                                     std::vector<Eigen::Vector2d> scene_hits = {},
-                                    const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kUnknownSpeed));
+                                    const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kNotKnown));
 
   /// For each detection of an image at `stamp_s` [s], what the track of its label group whose
   /// last box overlaps the detection's box most (by min_iou or more) expects of it: its cells
@@ -223,12 +222,8 @@ private:
   };
 
   /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
-  /// optimal assignment, of the observations with cells first, then of those without.
+  /// optimal assignment (an observation without cells is admitted by its box alone).
   std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
-  /// The association cost of the tracks `rows` and the observations `cols` (indices).
-  CostMatrix associationCost(const std::vector<TrackObservation>& observations,
-                             const std::vector<std::size_t>& rows,
-                             const std::vector<std::size_t>& cols) const;
   /// A matched track takes its observation: the centre (or a restart there), the grid's evidence,
   /// the registration of its hits; an observation without cells only its box and label.
   void updateTrack(Track& track, const TrackObservation& observation) const;
@@ -271,8 +266,8 @@ private:
   std::uint32_t next_id_ = 1;
   bool has_stamp_ = false;
   double last_stamp_ = 0.0;
-  Eigen::Vector2d last_camera_ = Eigen::Vector2d::Constant(kUnknownSpeed);  ///< at last_stamp_ [m]
-  double camera_speed_ = kUnknownSpeed;  ///< between the last two images [m/s]; NaN: not known
+  Eigen::Vector2d last_camera_ = Eigen::Vector2d::Constant(kNotKnown);  ///< at last_stamp_ [m]
+  double camera_speed_ = kNotKnown;  ///< between the last two images [m/s]; NaN: not known
 };
 
 /// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
@@ -286,7 +281,7 @@ private:
 /// keeps its box's. Sets result.tracked.
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
                   std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
-                  const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kUnknownSpeed));
+                  const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kNotKnown));
 
 /// Intersection over union of two boxes (continuous pixel coordinates), 0 when disjoint or empty.
 double boxOverlap(const BoundingBox& a, const BoundingBox& b);
