@@ -14,7 +14,6 @@ namespace grid_vision_fusion
 {
 namespace
 {
-constexpr double kPi = 3.14159265358979323846;
 
 constexpr double kMinEdgeDistanceM = 0.05;  // closeness criterion: nearer points count as this near
 constexpr double kCoarseStepRad = M_PI / 20.0;
