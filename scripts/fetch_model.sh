@@ -317,7 +317,7 @@ EOF
   say "licence: the YOLOv5s weights are Ultralytics' under GPL-3.0 (AGPL-3.0 since 2023), whatever the npm" \
     "package's own MIT licence says; do not commit or ship them. Written to $licence"
   say "yolo_detector parameters: model $onnx_file, weights \"\", class_names $dir/coco.names," \
-    "input_width $width, input_height $height, onnx_layout pixels"
+    "onnx_layout pixels (its input, $width x $height, is declared in the file)"
   echo "$onnx_file"
 }
 

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "grid_vision_fusion/cli/machine_info.h"
+#include "grid_vision_fusion/cli/model_options.h"
 #include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/detection/kitti_results.h"
@@ -55,8 +56,9 @@ options:
   --class-names FILE      class names, one per line (default: the package's models/yolo/coco.names)
   --config FILE           detector parameters as config/yolo_detector.yaml: input size, resize mode,
                           NMS, class_map, DNN backend (default: the package's config/yolo_detector.yaml)
-  --input WxH             network input size, e.g. 640x192 (overrides the config's; required for an
-                          ONNX model unless --config is given: the size it was converted for)
+  --input WxH             network input size, e.g. 416x416 for a Darknet cfg (overrides the config's;
+                          default: the model's own, the cfg's [net] size or the input an ONNX file
+                          declares, which is the only size such a model runs at)
   --score-threshold S     lowest score written, [0, 1] (default 0.25, below the nodelet's 0.5: the
                           replay's score_threshold filters when the files are read)
   --nms N                 IoU of per-class non-maximum suppression, [0, 1] (default: the config's)
@@ -196,6 +198,14 @@ bool parseArguments(int argc, char** argv, Options& o)
   {
     throw UsageError("--model is required");
   }
+  try
+  {
+    gvf::checkModelOptions(o.model, o.weights);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    throw UsageError(e.what());
+  }
   if (o.output.empty())
   {
     throw UsageError("--output is required");
@@ -211,12 +221,6 @@ bool parseArguments(int argc, char** argv, Options& o)
   if (all_classes)
   {
     o.class_map.emplace();
-  }
-  const bool onnx = o.model.size() >= 5 && o.model.compare(o.model.size() - 5, 5, ".onnx") == 0;
-  if (onnx && !o.input && o.config.empty())
-  {
-    throw UsageError("an ONNX model runs at the input size it was converted for: give --input WxH (e.g. " +
-                     std::string("--input 640x192 for yolov5s-640x192.onnx)"));
   }
   return true;
 }
@@ -367,25 +371,6 @@ gvf::YoloDetectorConfig detectorConfig(const Options& o)
   return config;
 }
 
-/// The detector of `config`; an ONNX model that fails at its input size gets the hint --input.
-std::unique_ptr<gvf::YoloDetector> loadDetector(const gvf::YoloDetectorConfig& config)
-{
-  try
-  {
-    return std::make_unique<gvf::YoloDetector>(config);
-  }
-  catch (const gvf::YoloModelError& e)
-  {
-    const bool onnx = config.weights_path.empty();
-    const bool forward_failed = std::string(e.what()).find("forward pass at input") != std::string::npos;
-    throw gvf::YoloModelError(std::string(e.what()) +
-                              (onnx && forward_failed
-                                   ? " (an ONNX model runs at the input size it was converted "
-                                     "for: give it with --input WxH)"
-                                   : ""));
-  }
-}
-
 /// What the run did, for the summary.
 struct RunSummary
 {
@@ -466,7 +451,7 @@ int run(const Options& o)
 {
   const std::vector<fs::path> images = listImages(o.images);
   const gvf::YoloDetectorConfig config = detectorConfig(o);
-  const std::unique_ptr<gvf::YoloDetector> detector = loadDetector(config);
+  const std::unique_ptr<gvf::YoloDetector> detector = std::make_unique<gvf::YoloDetector>(config);
   for (const std::string& warning : detector->warnings())
   {
     std::cerr << "detect: warning: " << warning << "\n";

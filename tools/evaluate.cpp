@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -276,6 +277,16 @@ int run(const Options& o)
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::cerr << "Reading the drive " << o.drive << "\n";
   const bool tracklets = o.labels.empty() && o.tracking_labels.empty();
+  if (tracklets && std::filesystem::is_directory(o.drive) &&
+      !std::filesystem::exists(o.drive + "/tracklet_labels.xml"))
+  {
+    const std::string label_2 = o.drive + "/label_2";
+    throw std::runtime_error(
+        o.drive + "/tracklet_labels.xml: no such file, so this drive has no tracklets: give " +
+        "its ground truth with --labels DIR (KITTI label files, one per frame" +
+        (std::filesystem::is_directory(label_2) ? ", e.g. --labels " + label_2 : std::string()) +
+        ") or --tracking-labels FILE (a KITTI tracking sequence's label_02 file)");
+  }
   const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, tracklets);
   std::vector<gvf::GroundTruthObject> truth = readGroundTruth(o, drive);
   const auto regions = static_cast<std::size_t>(std::count_if(

@@ -12,9 +12,11 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "grid_vision_fusion/cli/machine_info.h"
+#include "grid_vision_fusion/cli/model_options.h"
 #include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/cli/temporary_output.h"
@@ -57,8 +59,15 @@ options:
   --write-detections        also write /detections (Detection2DArray)
   --benchmark               print the median time per frame of every stage, the total, the
                             real-time factor and the memory (peak, and growth after frame 500)
+  -q, --quiet               no progress bar
   -h, --help                this text
+
+Exit status: 0 object arrays written; 1 an error naming the file or the option; 3 the bag was read
+to its end but no object array came out (the output bag is kept; the reasons are printed: an input
+topic without messages, the drops of each stage).
 )";
+
+constexpr int kExitNoObjects = 3;
 
 struct Options
 {
@@ -72,6 +81,7 @@ struct Options
   bool write_grids = false;
   bool write_detections = false;
   bool benchmark = false;
+  bool quiet = false;
 };
 
 void parseTopics(const std::string& list, gvf::PipelineTopics& topics)
@@ -161,8 +171,10 @@ int run(const Options& o)
   gvf::readParam(detector, "backend", backend);
   if (backend == "opencv_dnn")
   {
-    detector.set("model",
-                 o.model.empty() ? gvf::packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model);
+    const std::string model =
+        o.model.empty() ? gvf::packagePath("--model") + "/models/yolo/yolov3.cfg" : o.model;
+    gvf::checkModelOptions(model, o.weights);
+    detector.set("model", model);
     detector.set("weights", o.weights);
     detector.set("class_names", o.class_names.empty()
                                     ? gvf::packagePath("--class-names") + "/models/yolo/coco.names"
@@ -227,6 +239,10 @@ int run(const Options& o)
       gvf::runPipelineOnBag(pipeline, o.bag, o.topics,
                             [&](std::size_t done, std::size_t total)
                             {
+                              if (o.quiet)
+                              {
+                                return;
+                              }
                               if (!bar)
                               {
                                 bar = std::make_unique<gvf::ProgressBar>(std::cerr, total, "messages", tty);
@@ -261,6 +277,21 @@ int run(const Options& o)
       std::cerr << "  " << w << "\n";
     }
   }
+  if (s.objects == 0)
+  {
+    std::cerr << "run_pipeline: error: no object array came out of " << o.bag << " (" << o.output
+              << " holds no /objects)";
+    for (const auto& [count, topic, what] :
+         {std::tuple{s.clouds, o.topics.points, "point cloud"}, std::tuple{s.images, o.topics.image, "image"},
+          std::tuple{s.camera_infos, o.topics.camera_info, "camera_info"}})
+    {
+      if (count == 0)
+      {
+        std::cerr << "; no " << what << " on " << topic << " (--topics names another)";
+      }
+    }
+    std::cerr << (s.warnings.empty() ? "\n" : "; the reasons above\n");
+  }
   if (o.benchmark)
   {
     const double grid = medianOf(s.grid_ms);
@@ -289,7 +320,7 @@ int run(const Options& o)
     }
     std::printf("\n");
   }
-  return 0;
+  return s.objects > 0 ? 0 : kExitNoObjects;
 }
 }  // namespace
 
@@ -319,6 +350,11 @@ int main(int argc, char** argv)
       if (arg == "--benchmark")
       {
         o.benchmark = true;
+        continue;
+      }
+      if (arg == "-q" || arg == "--quiet")
+      {
+        o.quiet = true;
         continue;
       }
       if (i + 1 >= argc)

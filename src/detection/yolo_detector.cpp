@@ -473,21 +473,20 @@ void YoloDetectorConfig::validate() const
   const bool onnx = endsWith(model_path, ".onnx");
   if (!darknet && !onnx)
   {
-    throw std::invalid_argument("model_path must name a Darknet .cfg or an .onnx file, got \"" + model_path +
+    throw std::invalid_argument("model must name a Darknet .cfg or an .onnx file, got \"" + model_path +
                                 "\"");
   }
   if (darknet && weights_path.empty())
   {
-    throw std::invalid_argument("weights_path must name the .weights file of the Darknet model " +
-                                model_path);
+    throw std::invalid_argument("weights must name the .weights file of the Darknet model " + model_path);
   }
   if (onnx && !weights_path.empty())
   {
-    throw std::invalid_argument("weights_path must be empty for an ONNX model, got \"" + weights_path + "\"");
+    throw std::invalid_argument("weights must be empty for an ONNX model, got \"" + weights_path + "\"");
   }
   if (class_names_path.empty())
   {
-    throw std::invalid_argument("class_names_path must name the class names file");
+    throw std::invalid_argument("class_names must name the class names file");
   }
   if (input_width < 0 || input_width > kMaxInputSize || input_height < 0 || input_height > kMaxInputSize)
   {
@@ -496,11 +495,8 @@ void YoloDetectorConfig::validate() const
   }
   if ((input_width == 0) != (input_height == 0))
   {
-    throw std::invalid_argument("input_width and input_height must both be 0 (size of the cfg) or both set");
-  }
-  if (onnx && input_width == 0)
-  {
-    throw std::invalid_argument("input_width and input_height must be set (> 0) for an ONNX model");
+    throw std::invalid_argument(
+        "input_width and input_height must both be 0 (the model's own size) or both set");
   }
   if (!(score_threshold >= 0.0 && score_threshold <= 1.0))
   {
@@ -781,12 +777,7 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
     }
     else
     {
-      std::ifstream probe(config_.model_path, std::ios::binary);
-      if (!probe)
-      {
-        throw YoloModelError(config_.model_path + ": cannot open the ONNX model file");
-      }
-      input_size_ = cv::Size(config_.input_width, config_.input_height);
+      input_size_ = onnxInputSize(readOnnxInput(config_.model_path));
       layout_ = config_.onnx_layout;
       net_ = cv::dnn::readNetFromONNX(config_.model_path);
     }
@@ -843,6 +834,32 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
                            " values per box (5 + " + std::to_string(columns - 5) + " classes)");
     }
   }
+}
+
+cv::Size YoloDetector::onnxInputSize(const OnnxInputInfo& input) const
+{
+  const cv::Size given(config_.input_width, config_.input_height);
+  const cv::Size declared = input.imageSize();
+  const auto text = [](cv::Size size)
+  { return std::to_string(size.width) + "x" + std::to_string(size.height); };
+  std::string shape;
+  for (const long long dim : input.shape)
+  {
+    shape += (shape.empty() ? "" : ", ") + (dim > 0 ? std::to_string(dim) : std::string("?"));
+  }
+  const std::string declaration = "input \"" + input.name + "\" [" + shape + "]";
+  if (declared.empty() && given.area() == 0)
+  {
+    throw YoloModelError(config_.model_path + ": the model's " + declaration +
+                         " leaves its image size open: give the input size it was exported for");
+  }
+  if (!declared.empty() && given.area() > 0 && given != declared)
+  {
+    throw YoloModelError(config_.model_path + ": the model declares its " + declaration + ", an input of " +
+                         text(declared) + ", but the input size given is " + text(given) + ": give " +
+                         text(declared) + " or no size at all");
+  }
+  return declared.empty() ? given : declared;
 }
 
 void YoloDetector::selectBackend()

@@ -68,12 +68,16 @@ TEST_P(YoloOnnxModelTest, FindsTheLabelledKittiObjects)
   YoloDetectorConfig config;
   config.model_path = model.string();
   config.class_names_path = kClassNames;
-  config.input_width = size.width;
-  config.input_height = size.height;
   config.onnx_layout = YoloOutputLayout::kPixels;
   config.score_threshold = 0.25;
+  // No size given: the one the file declares ([1, 3, H, W]); the same given is accepted too.
+  ASSERT_EQ(readOnnxInput(model.string()).shape, (std::vector<long long>{1, 3, size.height, size.width}));
   YoloDetector detector(config);
+  ASSERT_EQ(detector.inputSize(), size);
   ASSERT_EQ(detector.classNames().size(), 80U);
+  config.input_width = size.width;
+  config.input_height = size.height;
+  EXPECT_EQ(YoloDetector(config).inputSize(), size);
 
   // KITTI type -> the COCO classes that find it (a KITTI truck is often a "bus" to COCO).
   const std::map<std::string, std::set<std::string>> matching = {{"Car", {"car"}},

@@ -22,6 +22,7 @@
   GVF_FUZZ_HARNESS(kitti_labels)             \
   GVF_FUZZ_HARNESS(kitti_object_calibration) \
   GVF_FUZZ_HARNESS(kitti_raw_calibration)    \
+  GVF_FUZZ_HARNESS(onnx_input)               \
   GVF_FUZZ_HARNESS(oxts)                     \
   GVF_FUZZ_HARNESS(point_cloud_view)         \
   GVF_FUZZ_HARNESS(replay_labels)            \

@@ -95,10 +95,8 @@ void expectYamlMatchesTable(const std::string& file, const std::set<std::string>
 TEST(NodeParams, TheYamlFilesHoldTheStructDefaults)
 {
   expectYamlMatchesTable<DynamicGridParams>("dynamic_grid.yaml", {}, {});
-  // The detector's file configures the 416 x 416 input of the README's models and the COCO and
-  // KITTI class maps; the model files have no default.
-  expectYamlMatchesTable<DetectorParams>("yolo_detector.yaml",
-                                         {"input_width", "input_height", "class_map", "replay/class_map"},
+  // The detector's file configures the COCO and KITTI class maps; the model files have no default.
+  expectYamlMatchesTable<DetectorParams>("yolo_detector.yaml", {"class_map", "replay/class_map"},
                                          {"model", "weights", "class_names", "replay/directory"});
   expectYamlMatchesTable<GridProjectionParams>("grid_projection.yaml", {}, {});
   expectYamlMatchesTable<FusionParams>("fusion.yaml", {}, {});

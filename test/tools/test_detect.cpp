@@ -199,8 +199,8 @@ TEST_F(DetectTool, BadArgumentsExitTwoWithTheUsage)
         modelArgs() + output + image + " --score-threshold 1.5",
         modelArgs() + output + image + " --class-map car",
         modelArgs() + output + image + " --all-classes --class-map car=Car",
-        "--model " + dir_ + "/yolov5s-640x192.onnx" + output + image,
-        modelArgs() + output + image + " --nms"})
+        "--model " + model_.cfg + output + image, "--model m.onnx --weights m.weights" + output + image,
+        "--model m.pt" + output + image, modelArgs() + output + image + " --nms"})
   {
     const Result result = run(arguments);
     EXPECT_EQ(result.status, 2) << arguments << "\n" << result.output;
@@ -208,6 +208,13 @@ TEST_F(DetectTool, BadArgumentsExitTwoWithTheUsage)
   }
   EXPECT_FALSE(fs::exists(dir_ + "/labels"));
   EXPECT_EQ(run("--help").status, 0);
+  // The messages name the options as typed, not the detector's parameters (weights_path, ...).
+  EXPECT_NE(
+      run("--model " + model_.cfg + output + image).output.find("give its .weights file with --weights"),
+      std::string::npos);
+  EXPECT_NE(
+      run("--model m.onnx --weights m.weights" + output + image).output.find("--weights m.weights is not"),
+      std::string::npos);
 }
 
 TEST_F(DetectTool, TwoImagesOfOneNameAreAUsageError)
@@ -235,8 +242,8 @@ TEST_F(DetectTool, AMissingModelOrInputExitsOneNamingTheFile)
   EXPECT_EQ(result.output.find("usage:"), std::string::npos) << result.output;
 
   const std::string missing_model = dir_ + "/model/missing.onnx";
-  result = run("--model " + missing_model + " --input 640x192 --class-names " + model_.names + " --config " +
-               kConfig + " --output " + dir_ + "/labels " + image);
+  result = run("--model " + missing_model + " --class-names " + model_.names + " --config " + kConfig +
+               " --output " + dir_ + "/labels " + image);
   EXPECT_EQ(result.status, 1) << result.output;
   EXPECT_NE(result.output.find(missing_model), std::string::npos) << result.output;
 

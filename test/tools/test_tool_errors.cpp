@@ -3,6 +3,7 @@
 // inputs come from the tools themselves: a two-frame synthetic drive (make_synthetic_drive), its
 // bag (kitti_to_bag), and that bag cut in half as a recording cut short leaves it.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -159,6 +160,43 @@ TEST_F(ToolErrors, RunPipelineNamesABadParam)
   expectCleanFailure(run(start + " --param dynamic_grid/threads=many"), "threads", output);
 }
 
+TEST_F(ToolErrors, RunPipelineWithoutObjectsExitsThreeAndSaysWhy)
+{
+  const fs::path output = work_ / "out.bag";
+  const Result result = run(std::string(RUN_PIPELINE) + " -q --bag " + full_bag_.string() + " --output " +
+                            output.string() + replayArgs(drive_) + " --topics camera_info=/no_camera_info");
+  EXPECT_EQ(WEXITSTATUS(result.status), 3) << result.output;
+  EXPECT_NE(result.output.find("no object array came out of " + full_bag_.string()), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("no camera_info on /no_camera_info"), std::string::npos) << result.output;
+  EXPECT_TRUE(fs::exists(output)) << "the bag read is kept";
+}
+
+TEST_F(ToolErrors, RunPipelineQuietRunsWithoutProgress)
+{
+  const fs::path output = work_ / "out.bag";
+  const Result result = run(std::string(RUN_PIPELINE) + " --quiet --bag " + full_bag_.string() +
+                            " --output " + output.string() + replayArgs(drive_));
+  EXPECT_EQ(result.status, 0) << result.output;
+  EXPECT_EQ(result.output.find("messages: "), std::string::npos) << result.output;
+  EXPECT_EQ(run(std::string(RUN_PIPELINE) + " -q --bag " + full_bag_.string() + " --output " +
+                output.string() + replayArgs(drive_))
+                .status,
+            0);
+}
+
+TEST_F(ToolErrors, RunPipelineNamesTheModelOptionsTyped)
+{
+  const fs::path output = work_ / "out.bag";
+  writeFile(output, kPrecious);
+  const std::string start = std::string(RUN_PIPELINE) + " --bag " + full_bag_.string() + " --output " +
+                            output.string() + " --config-dir " GVF_SOURCE_DIR "/config --backend opencv_dnn";
+  expectCleanFailure(run(start + " --model /models/yolov3.cfg"), "give its .weights file with --weights",
+                     output);
+  expectCleanFailure(run(start + " --model m.onnx --weights m.weights"), "--weights m.weights is not used",
+                     output);
+}
+
 TEST_F(ToolErrors, KittiToBagNamesAMissingDrive)
 {
   const fs::path output = work_ / "out.bag";
@@ -204,6 +242,35 @@ TEST_F(ToolErrors, EvaluateNamesAMissingDrive)
   const Result result = run(std::string(EVALUATE) + " --drive " + missing.string() + " --detections " +
                             full_bag_.string() + " --output " + output.string());
   expectCleanFailure(result, missing.string(), output / "metrics.json");
+}
+
+TEST_F(ToolErrors, EvaluatePointsToLabelsForADriveWithoutTracklets)
+{
+  const fs::path drive = work_ / "2011_09_26" / drive_.filename();
+  fs::copy(drive_.parent_path(), drive.parent_path(), fs::copy_options::recursive);
+  fs::remove(drive / "tracklet_labels.xml");
+  ASSERT_TRUE(fs::exists(drive / "label_2" / "0000000000.txt")) << "label files named like KITTI raw frames";
+  const fs::path objects = work_ / "objects.bag";
+  ASSERT_EQ(run(std::string(RUN_PIPELINE) + " -q --bag " + full_bag_.string() + " --output " +
+                objects.string() + replayArgs(drive_))
+                .status,
+            0);
+  const fs::path output = work_ / "evaluation";
+  const std::string start = std::string(EVALUATE) + " --drive " + drive.string() + " --detections " +
+                            objects.string() + " --output " + output.string();
+  const Result result = run(start);
+  EXPECT_NE(result.status, 0) << result.output;
+  EXPECT_NE(result.output.find((drive / "tracklet_labels.xml").string() + ": no such file"),
+            std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("--labels " + (drive / "label_2").string()), std::string::npos)
+      << result.output;
+  // The 10-digit label files are taken as frames (and then refused for their content: a drive's
+  // label_2 lacks the motion column that --labels wants).
+  const Result labelled = run(start + " --labels " + (drive / "label_2").string());
+  EXPECT_EQ(labelled.output.find("no label files named"), std::string::npos) << labelled.output;
+  EXPECT_NE(labelled.output.find("label_2/0000000000.txt:1: expected 15 KITTI fields"), std::string::npos)
+      << labelled.output;
 }
 
 TEST_F(ToolErrors, MakeSyntheticDriveNamesAMissingScenario)

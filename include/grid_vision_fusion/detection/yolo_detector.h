@@ -63,9 +63,10 @@ struct YoloDetectorConfig
   std::string weights_path;
   /// Class names, one per line (e.g. coco.names); their number must match the model.
   std::string class_names_path;
-  /// Network input size [px]; 0 takes the size of the Darknet cfg's [net] section. Required
-  /// (> 0) for ONNX models. Darknet sizes must be multiples of 32 for YOLOv3/v4 (checked by
-  /// OpenCV at the first forward pass). Range [0, 4096].
+  /// Network input size [px]; 0 takes the model's own: the Darknet cfg's [net] size, the input
+  /// an ONNX file declares (readOnnxInput()). An ONNX model with a fixed input runs at that size
+  /// only: another size given is an error naming both. Darknet sizes must be multiples of 32 for
+  /// YOLOv3/v4 (checked by OpenCV at the first forward pass). Range [0, 4096].
   int input_width = 0;
   int input_height = 0;
   /// How the image is fitted to the input size.
@@ -139,6 +140,27 @@ std::size_t checkDarknetWeights(const std::string& weights_path, const std::stri
 /// `weights_source`.
 std::size_t checkDarknetWeights(std::istream& weights, const std::string& weights_source,
                                 const std::string& cfg_path, const DarknetCfgInfo& info);
+
+/// The input an ONNX model declares: the first graph input that is not an initializer.
+struct OnnxInputInfo
+{
+  std::string name;
+  /// Its dimensions, outermost first ([1, 3, 192, 640] for yolov5s-640x192.onnx); -1 for a
+  /// dimension left open (a named or absent dim_value).
+  std::vector<long long> shape;
+
+  /// The fixed input size of an NCHW image input ([n, 3, H, W] with H, W > 0); an empty size
+  /// when the model leaves it open.
+  cv::Size imageSize() const;
+};
+
+/// Reads the declared input of an ONNX model (the protobuf fields ModelProto.graph,
+/// GraphProto.input/initializer, ValueInfoProto.type.tensor_type.shape), without OpenCV.
+/// @throws YoloModelError naming the file when it cannot be read, is not a well-formed ONNX
+///         protobuf or declares no input.
+OnnxInputInfo readOnnxInput(const std::string& onnx_path);
+/// readOnnxInput() of the bytes of a model; errors name `source`.
+OnnxInputInfo parseOnnxInput(const std::string& bytes, const std::string& source);
 
 /// Reads class names, one per line (trailing whitespace and CR removed, blank lines skipped).
 /// @throws YoloModelError naming the file when it cannot be read or holds no name.
@@ -228,6 +250,9 @@ public:
   std::string backendDescription() const;
 
 private:
+  /// The input size of an ONNX model: the one it declares, or the one given where it leaves it
+  /// open. @throws YoloModelError when neither is known or the two differ.
+  cv::Size onnxInputSize(const OnnxInputInfo& input) const;
   void selectBackend();
 
   YoloDetectorConfig config_;
