@@ -21,8 +21,9 @@ usage: calibrate_detector_noise.py --model M.onnx [--input 640x192] DIR [DIR ...
 The detector: OpenCV DNN with YoloDetector's preprocessing and decoding (letterbox with grey 0.5
 borders, RGB in [0, 1], NCHW; output rows cx, cy, w, h in input pixels, objectness, class
 probabilities; score = objectness x class probability, every class of a row a candidate;
-per-class NMS at 0.45) and config/yolo_detector.yaml's class_map (car, truck, bus -> van,
-person -> pedestrian, bicycle -> cyclist; other classes dropped).
+per-class NMS at 0.45), config/yolo_detector.yaml's rider_merge (a bicycle or motorbike with a
+person over it is one cyclist box, as mergeRiders() in src/detection/yolo_detector.cpp) and
+class_map (car, truck, bus -> van, person -> pedestrian; other classes dropped).
 
 Matching, per frame, class-agnostic (the class confusion is measured on the matches), labels of
 the types Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram, Misc:
@@ -61,7 +62,9 @@ import numpy as np
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 NMS_THRESHOLD = 0.45
-CLASS_MAP = {"car": "car", "truck": "truck", "bus": "van", "person": "pedestrian", "bicycle": "cyclist"}
+CLASS_MAP = {"car": "car", "truck": "truck", "bus": "van", "person": "pedestrian"}
+RIDER_MERGE = {"bicycle": "cyclist", "motorbike": "cyclist"}
+RIDER_CLASS = "person"
 LABELLED = ["Car", "Van", "Truck", "Pedestrian", "Person_sitting", "Cyclist", "Tram", "Misc"]
 # The types the replay backend publishes under the five labels of the detector.
 EXPECTED = {"Car": "car", "Van": "van", "Truck": "truck", "Pedestrian": "pedestrian",
@@ -197,7 +200,7 @@ class Detector:
         sx, sy = rw / w, rh / h
         detections = []
         for class_id, coco in enumerate(self.names):
-            if coco not in CLASS_MAP:
+            if coco not in CLASS_MAP and coco not in RIDER_MERGE:
                 continue
             scores = rows[:, 4] * rows[:, 5 + class_id]
             keep = np.nonzero((rows[:, 4] > 0) & (scores >= self.min_score))[0]
@@ -210,9 +213,35 @@ class Detector:
                 box = (float(np.clip((x - px) / sx, 0, w)), float(np.clip((y - py) / sy, 0, h)),
                        float(np.clip((x + bw - px) / sx, 0, w)), float(np.clip((y + bh - py) / sy, 0, h)))
                 if box[2] > box[0] and box[3] > box[1]:
-                    detections.append({"label": CLASS_MAP[coco], "score": float(scores[keep[i]]), "box": box})
-        detections.sort(key=lambda d: -d["score"])
-        return detections
+                    detections.append({"label": coco, "score": float(scores[keep[i]]), "box": box})
+        return published_detections(detections)
+
+
+def published_detections(detections):
+    """The detector's labelling of boxes labelled by COCO class: riders merged, then CLASS_MAP."""
+    vehicles = sorted((d for d in detections if d["label"] in RIDER_MERGE), key=lambda d: -d["score"])
+    riders = [d for d in detections if d["label"] == RIDER_CLASS]
+    used, published = set(), []
+    for vehicle in vehicles:
+        vx0, vy0, vx1, vy1 = vehicle["box"]
+        best, widest = None, 0.0
+        for rider in riders:
+            rx0, ry0, rx1, ry1 = rider["box"]
+            centre = 0.5 * (rx0 + rx1)
+            overlap = min(rx1, vx1) - max(rx0, vx0)
+            if (id(rider) not in used and vx0 <= centre <= vx1 and ry0 < vy0 and ry1 > vy0 + 0.2 * (vy1 - vy0)
+                    and overlap > widest):
+                best, widest = rider, overlap
+        if best is None:
+            continue
+        used.update((id(vehicle), id(best)))
+        rx0, ry0, rx1, ry1 = best["box"]
+        published.append({"label": RIDER_MERGE[vehicle["label"]], "score": max(vehicle["score"], best["score"]),
+                          "box": (min(vx0, rx0), min(vy0, ry0), max(vx1, rx1), max(vy1, ry1))})
+    published += [dict(d, label=CLASS_MAP[d["label"]]) for d in detections
+                  if id(d) not in used and d["label"] in CLASS_MAP]
+    published.sort(key=lambda d: -d["score"])
+    return published
 
 
 def read_detections(path):

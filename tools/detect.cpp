@@ -64,7 +64,7 @@ options:
   --nms N                 IoU of per-class non-maximum suppression, [0, 1] (default: the config's)
   --class-map LIST        model class -> written type, e.g. car=Car,person=Pedestrian; other classes
                           are not written (default: the config's class_map)
-  --all-classes           write every class of the model under its own name
+  --all-classes           write every class of the model under its own name (riders not merged)
   --output DIR            folder of the label files (created; files of the same name are replaced)
   --overlay               also write DIR/overlay/<image name>.png: the boxes with type and score
   -q, --quiet             no progress bar
@@ -87,6 +87,7 @@ struct Options
   std::optional<cv::Size> input;
   std::optional<double> score_threshold, nms;
   std::optional<std::map<std::string, std::string>> class_map;
+  bool all_classes = false;  ///< also no rider merging
   bool overlay = false;
   bool quiet = false;
   std::vector<std::string> images;
@@ -145,7 +146,7 @@ std::map<std::string, std::string> parseClassMap(const std::string& text)
 /// Parses the command line; false when --help was asked for.
 bool parseArguments(int argc, char** argv, Options& o)
 {
-  bool all_classes = false;
+  bool& all_classes = o.all_classes;
   bool options_ended = false;
   for (int i = 1; i < argc; ++i)
   {
@@ -366,6 +367,10 @@ gvf::YoloDetectorConfig detectorConfig(const Options& o)
   if (o.class_map)
   {
     config.class_map = *o.class_map;
+  }
+  if (o.all_classes)
+  {
+    config.rider_merge.clear();
   }
   config.validate();
   return config;

@@ -525,6 +525,20 @@ void YoloDetectorConfig::validate() const
                                   "\" -> \"" + entry.second + "\"");
     }
   }
+  for (const auto& entry : rider_merge)
+  {
+    if (entry.first.empty() || entry.second.empty() || entry.first == rider_class)
+    {
+      throw std::invalid_argument("rider_merge entries must map a vehicle class other than rider_class \"" +
+                                  rider_class + "\" to a non-empty label, got \"" + entry.first + "\" -> \"" +
+                                  entry.second + "\"");
+    }
+  }
+  if (!rider_merge.empty() && rider_class.empty())
+  {
+    throw std::invalid_argument(
+        "rider_class must name the riders' model class (e.g. person) for rider_merge");
+  }
 }
 
 DarknetCfgInfo parseDarknetCfg(const std::string& cfg_path)
@@ -956,20 +970,9 @@ std::vector<Detection> YoloDetector::detect(const cv::Mat& image, PixelFormat fo
   std::vector<Detection> detections;
   for (const YoloCandidate& candidate : kept)
   {
-    const std::string& name = class_names_[static_cast<std::size_t>(candidate.class_id)];
-    std::string label = name;
-    if (!config_.class_map.empty())
-    {
-      const auto it = config_.class_map.find(name);
-      if (it == config_.class_map.end())
-      {
-        continue;
-      }
-      label = it->second;
-    }
     Detection detection;
     detection.class_id = static_cast<std::uint32_t>(candidate.class_id);
-    detection.label = label;
+    detection.label = class_names_[static_cast<std::size_t>(candidate.class_id)];
     detection.score = candidate.score;
     detection.box = transform.toImage(candidate.box.x, candidate.box.y, candidate.box.x + candidate.box.width,
                                       candidate.box.y + candidate.box.height);
@@ -978,9 +981,91 @@ std::vector<Detection> YoloDetector::detect(const cv::Mat& image, PixelFormat fo
       detections.push_back(std::move(detection));
     }
   }
-  std::stable_sort(detections.begin(), detections.end(),
+  return publishedDetections(std::move(detections), config_);
+}
+
+RiderMergeResult mergeRiders(std::vector<Detection> detections, const std::string& rider_class,
+                             const std::map<std::string, std::string>& vehicle_labels)
+{
+  RiderMergeResult result;
+  std::vector<std::size_t> vehicles;
+  std::vector<std::size_t> riders;
+  for (std::size_t i = 0; i < detections.size(); ++i)
+  {
+    if (vehicle_labels.count(detections[i].label) != 0)
+    {
+      vehicles.push_back(i);
+    }
+    else if (detections[i].label == rider_class)
+    {
+      riders.push_back(i);
+    }
+  }
+  std::stable_sort(vehicles.begin(), vehicles.end(),
+                   [&](std::size_t a, std::size_t b) { return detections[a].score > detections[b].score; });
+  std::vector<bool> used(detections.size(), false);
+  for (const std::size_t v : vehicles)
+  {
+    const BoundingBox& vehicle = detections[v].box;
+    const double rides_below = vehicle.y_min + 0.2 * (vehicle.y_max - vehicle.y_min);
+    double widest = 0.0;
+    std::size_t best = detections.size();
+    for (const std::size_t r : riders)
+    {
+      const BoundingBox& rider = detections[r].box;
+      const double centre = 0.5 * (rider.x_min + rider.x_max);
+      const double overlap = std::min(rider.x_max, vehicle.x_max) - std::max(rider.x_min, vehicle.x_min);
+      if (!used[r] && centre >= vehicle.x_min && centre <= vehicle.x_max && rider.y_min < vehicle.y_min &&
+          rider.y_max > rides_below && overlap > widest)
+      {
+        widest = overlap;
+        best = r;
+      }
+    }
+    if (best == detections.size())
+    {
+      continue;
+    }
+    used[v] = used[best] = true;
+    Detection merged = detections[v];
+    const BoundingBox& rider = detections[best].box;
+    merged.label = vehicle_labels.at(detections[v].label);
+    merged.score = std::max(detections[v].score, detections[best].score);
+    merged.box = {std::min(vehicle.x_min, rider.x_min), std::min(vehicle.y_min, rider.y_min),
+                  std::max(vehicle.x_max, rider.x_max), std::max(vehicle.y_max, rider.y_max)};
+    result.riders.push_back(std::move(merged));
+  }
+  for (std::size_t i = 0; i < detections.size(); ++i)
+  {
+    if (!used[i])
+    {
+      result.others.push_back(std::move(detections[i]));
+    }
+  }
+  return result;
+}
+
+std::vector<Detection> publishedDetections(std::vector<Detection> detections,
+                                           const YoloDetectorConfig& config)
+{
+  RiderMergeResult merged = mergeRiders(std::move(detections), config.rider_class, config.rider_merge);
+  std::vector<Detection> published = std::move(merged.riders);
+  for (Detection& detection : merged.others)
+  {
+    if (!config.class_map.empty())
+    {
+      const auto it = config.class_map.find(detection.label);
+      if (it == config.class_map.end())
+      {
+        continue;
+      }
+      detection.label = it->second;
+    }
+    published.push_back(std::move(detection));
+  }
+  std::stable_sort(published.begin(), published.end(),
                    [](const Detection& a, const Detection& b) { return a.score > b.score; });
-  return detections;
+  return published;
 }
 
 void drawDetections(cv::Mat& image, const std::vector<Detection>& detections)

@@ -589,3 +589,98 @@ TEST(Yolov4StyleTest, MishGroupedRouteAndScaleXYLoadAndRun)
 
 }  // namespace
 }  // namespace grid_vision_fusion
+
+namespace grid_vision_fusion
+{
+namespace
+{
+Detection box(const std::string& label, float score, float x_min, float y_min, float x_max, float y_max)
+{
+  Detection d;
+  d.label = label;
+  d.score = score;
+  d.box = {x_min, y_min, x_max, y_max};
+  return d;
+}
+
+TEST(MergeRiders, APersonOverABicycleIsOneBox)
+{
+  // A rider (x 100-140, y 40-150) on a bicycle (x 90-160, y 100-170); a pedestrian beside it.
+  const RiderMergeResult result =
+      mergeRiders({box("bicycle", 0.6F, 90, 100, 160, 170), box("person", 0.8F, 100, 40, 140, 150),
+                   box("person", 0.9F, 300, 40, 340, 170)},
+                  "person", {{"bicycle", "cyclist"}});
+  ASSERT_EQ(result.riders.size(), 1U);
+  EXPECT_EQ(result.riders[0].label, "cyclist");
+  EXPECT_FLOAT_EQ(result.riders[0].score, 0.8F);
+  EXPECT_FLOAT_EQ(result.riders[0].box.x_min, 90.F);
+  EXPECT_FLOAT_EQ(result.riders[0].box.y_min, 40.F);
+  EXPECT_FLOAT_EQ(result.riders[0].box.x_max, 160.F);
+  EXPECT_FLOAT_EQ(result.riders[0].box.y_max, 170.F);
+  ASSERT_EQ(result.others.size(), 1U);
+  EXPECT_FLOAT_EQ(result.others[0].box.x_min, 300.F) << "the pedestrian beside it stays a person";
+}
+
+TEST(MergeRiders, OnlyAPersonOverTheVehicleRidesIt)
+{
+  const Detection bicycle = box("bicycle", 0.6F, 90, 100, 160, 170);
+  // Beside it (centre outside), standing below its top only by a sliver, or wholly above it.
+  for (const Detection& person :
+       {box("person", 0.8F, 150, 40, 190, 170), box("person", 0.8F, 100, 40, 140, 110),
+        box("person", 0.8F, 100, 10, 140, 90)})
+  {
+    const RiderMergeResult result = mergeRiders({bicycle, person}, "person", {{"bicycle", "cyclist"}});
+    EXPECT_TRUE(result.riders.empty()) << person.box.x_min << " " << person.box.y_max;
+    EXPECT_EQ(result.others.size(), 2U);
+  }
+  // Two bicycles, one rider: the higher-scored bicycle gets it, the other stays a bicycle.
+  const RiderMergeResult two =
+      mergeRiders({bicycle, box("bicycle", 0.7F, 95, 105, 150, 170), box("person", 0.8F, 100, 40, 140, 150)},
+                  "person", {{"bicycle", "cyclist"}});
+  ASSERT_EQ(two.riders.size(), 1U);
+  EXPECT_FLOAT_EQ(two.riders[0].box.x_max, 150.F);
+  ASSERT_EQ(two.others.size(), 1U);
+  EXPECT_EQ(two.others[0].label, "bicycle");
+}
+
+TEST(PublishedDetections, ClassMapAppliesToTheBoxesNotMerged)
+{
+  YoloDetectorConfig config;
+  config.class_map = {{"person", "pedestrian"}, {"car", "car"}};
+  config.rider_merge = {{"bicycle", "cyclist"}, {"motorbike", "cyclist"}};
+  const std::vector<Detection> published =
+      publishedDetections({box("motorbike", 0.5F, 90, 100, 160, 170), box("person", 0.7F, 100, 40, 140, 150),
+                           box("bicycle", 0.9F, 400, 100, 460, 170), box("car", 0.6F, 500, 80, 600, 170),
+                           box("person", 0.4F, 300, 40, 340, 170)},
+                          config);
+  std::vector<std::string> labels;
+  for (const Detection& d : published)
+  {
+    labels.push_back(d.label);
+  }
+  // The parked bicycle has no rider and no class_map entry: dropped; by decreasing score.
+  EXPECT_EQ(labels, (std::vector<std::string>{"cyclist", "car", "pedestrian"}));
+  config.rider_merge.clear();
+  EXPECT_EQ(publishedDetections({box("bicycle", 0.9F, 400, 100, 460, 170)}, config).size(), 0U);
+  config.class_map.clear();
+  EXPECT_EQ(publishedDetections({box("bicycle", 0.9F, 400, 100, 460, 170)}, config).at(0).label, "bicycle");
+}
+
+TEST(PublishedDetections, RiderMergeIsValidated)
+{
+  YoloDetectorConfig config;
+  config.model_path = "m.cfg";
+  config.weights_path = "m.weights";
+  config.class_names_path = "m.names";
+  config.rider_merge = {{"person", "cyclist"}};
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config.rider_merge = {{"bicycle", ""}};
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config.rider_merge = {{"bicycle", "cyclist"}};
+  EXPECT_NO_THROW(config.validate());
+  config.rider_class.clear();
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace grid_vision_fusion

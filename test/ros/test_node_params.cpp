@@ -95,11 +95,43 @@ void expectYamlMatchesTable(const std::string& file, const std::set<std::string>
 TEST(NodeParams, TheYamlFilesHoldTheStructDefaults)
 {
   expectYamlMatchesTable<DynamicGridParams>("dynamic_grid.yaml", {}, {});
-  // The detector's file configures the COCO and KITTI class maps; the model files have no default.
-  expectYamlMatchesTable<DetectorParams>("yolo_detector.yaml", {"class_map", "replay/class_map"},
+  // The detector's file configures the COCO and KITTI class maps and the COCO riders; the model
+  // files have no default.
+  expectYamlMatchesTable<DetectorParams>("yolo_detector.yaml",
+                                         {"class_map", "rider_merge", "replay/class_map"},
                                          {"model", "weights", "class_names", "replay/directory"});
   expectYamlMatchesTable<GridProjectionParams>("grid_projection.yaml", {}, {});
   expectYamlMatchesTable<FusionParams>("fusion.yaml", {}, {});
+}
+
+TEST(NodeParams, TheDetectorYamlPublishesCyclistsOnlyWithTheirRiders)
+{
+  // doc/nodelets/yolo_detector.md's rider_merge: with the package's configuration a rider over
+  // a bicycle is one cyclist, a bicycle alone is dropped, a person alone is a pedestrian.
+  YamlParamSource source = YamlParamSource::fromFile(kSource + "/config/yolo_detector.yaml");
+  source.set("model", std::string("m.onnx"));  // the launch file's
+  source.set("class_names", std::string("coco.names"));
+  const YoloDetectorConfig config = DetectorParams::fromParams(source).yolo;
+  const auto detection = [](const std::string& label, float score, BoundingBox box)
+  {
+    Detection d;
+    d.label = label;
+    d.score = score;
+    d.box = box;
+    return d;
+  };
+  const std::vector<Detection> published = publishedDetections(
+      {detection("bicycle", 0.6F, {90, 100, 160, 170}), detection("person", 0.8F, {100, 40, 140, 150}),
+       detection("bicycle", 0.9F, {400, 100, 460, 170}), detection("person", 0.5F, {300, 40, 340, 170}),
+       detection("motorbike", 0.7F, {600, 100, 700, 170}), detection("person", 0.7F, {620, 30, 680, 140})},
+      config);
+  ASSERT_EQ(published.size(), 3U);
+  EXPECT_EQ(published[0].label, "cyclist");
+  EXPECT_FLOAT_EQ(published[0].box.y_min, 40.F);
+  EXPECT_EQ(published[1].label, "cyclist");
+  EXPECT_FLOAT_EQ(published[1].box.x_min, 600.F);
+  EXPECT_EQ(published[2].label, "pedestrian");
+  EXPECT_FLOAT_EQ(published[2].box.x_min, 300.F);
 }
 
 /// The gen.add() entries of a dynamic_reconfigure .cfg: name -> default.

@@ -134,6 +134,18 @@ class CalibrationTest(unittest.TestCase):
         self.assertAlmostEqual(spread, float(np.std(errors)), delta=0.008)
         self.assertAlmostEqual(self.figures["edges"]["top"]["bias"], 0.0, delta=1e-6)
 
+    def test_riders_merged_as_the_detector_does(self):
+        # The same boxes as test/ros/test_node_params.cpp's rider test of the C++ detector.
+        def box(label, score, b):
+            return {"label": label, "score": score, "box": b}
+        published = calibrate.published_detections([
+            box("bicycle", 0.6, (90, 100, 160, 170)), box("person", 0.8, (100, 40, 140, 150)),
+            box("bicycle", 0.9, (400, 100, 460, 170)), box("person", 0.5, (300, 40, 340, 170)),
+            box("motorbike", 0.7, (600, 100, 700, 170)), box("person", 0.7, (620, 30, 680, 140))])
+        self.assertEqual([(d["label"], d["score"], d["box"]) for d in published],
+                         [("cyclist", 0.8, (90, 40, 160, 170)), ("cyclist", 0.7, (600, 30, 700, 170)),
+                          ("pedestrian", 0.5, (300, 40, 340, 170))])
+
     def test_iou_and_bad_input(self):
         self.assertAlmostEqual(calibrate.iou((0, 0, 10, 10), (5, 0, 15, 10)), 1.0 / 3.0)
         self.assertAlmostEqual(calibrate.inside_fraction((0, 0, 10, 10), (5, 0, 20, 20)), 0.5)

@@ -92,6 +92,14 @@ struct YoloDetectorConfig
   /// "bus" → "van"). Empty: every class kept under its own name. Otherwise classes not in the
   /// map are dropped.
   std::map<std::string, std::string> class_map;
+  /// Riders: model class of a vehicle that is ridden → label of the vehicle and its rider as one
+  /// box (e.g. "bicycle" → "cyclist"). A box of such a class with a `rider_class` box over it
+  /// (mergeRiders()) becomes one box of that label, published as it is (class_map does not
+  /// apply to it); without a rider it stays a box of its own class, which class_map drops or
+  /// renames like any other. Empty: no merging.
+  std::map<std::string, std::string> rider_merge;
+  /// Model class of the riders of rider_merge (COCO: "person").
+  std::string rider_class = "person";
 
   /// @throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -207,6 +215,27 @@ std::vector<YoloCandidate> decodeYoloOutputs(const std::vector<cv::Mat>& outputs
 /// candidates, by class then by decreasing score.
 std::vector<YoloCandidate> suppressPerClass(const std::vector<YoloCandidate>& candidates,
                                             double score_threshold, double nms_threshold);
+
+/// The boxes of a ridden vehicle and of its rider merged into one (YoloDetectorConfig::rider_merge),
+/// and the boxes left as they were.
+struct RiderMergeResult
+{
+  std::vector<Detection> riders;  ///< union boxes labelled by rider_merge, the higher score of the two
+  std::vector<Detection> others;  ///< every other box, labels unchanged
+};
+
+/// Pairs each box whose label (a model class name) is a key of `vehicle_labels` with the
+/// `rider_class` box that rides it, vehicles by decreasing score, each rider at most once: a
+/// rider's horizontal centre lies within the vehicle box, its top above the vehicle's top and its
+/// bottom more than a fifth of the vehicle's height below that top (the person sits on or stands
+/// over it); of several, the one with the widest horizontal overlap.
+RiderMergeResult mergeRiders(std::vector<Detection> detections, const std::string& rider_class,
+                             const std::map<std::string, std::string>& vehicle_labels);
+
+/// What the detector publishes of the boxes found, labelled by their model class names: riders
+/// merged (mergeRiders()), then class_map applied to the other boxes, by decreasing score.
+std::vector<Detection> publishedDetections(std::vector<Detection> detections,
+                                           const YoloDetectorConfig& config);
 
 /// A YOLO network ready to run. Not thread-safe: one detect() at a time.
 class YoloDetector : public Detector

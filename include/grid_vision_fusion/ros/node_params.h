@@ -232,6 +232,8 @@ void visitParams(DetectorParams& p, Visitor& v)
   v("dnn_target", p.yolo.target);
   v("winograd", p.yolo.winograd);
   v("class_map", p.yolo.class_map);
+  v("rider_merge", p.yolo.rider_merge);
+  v("rider_class", p.yolo.rider_class);
   v("replay/directory", p.replay.directory);
   v("replay/file_pattern", p.replay.file_pattern);
   v("replay/frame_index", p.replay.index_source);
