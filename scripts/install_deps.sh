@@ -19,6 +19,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev clang-format
   python3-rospy python3-sensor-msgs python3-geometry-msgs python3-nav-msgs
   python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag python3-yaml
+  python3-diagnostic-msgs python3-rostopic
   python3-onnx python3-opencv curl
 )
 if [[ "${1:-}" == "--with-rviz" ]]; then

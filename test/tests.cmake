@@ -50,6 +50,7 @@ gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_
 gvf_gtest(test_ros
   SOURCES test/ros/test_fusion_conversions.cpp test/ros/test_param_source.cpp test/ros/test_node_params.cpp
     test/ros_stages/test_stages.cpp test/ros_sync/test_tf_wait_queue.cpp test/ros_sync/test_grid_for_image.cpp
+    test/ros_sync/test_stage_monitor.cpp
   LINK grid_vision_fusion_ros grid_vision_fusion_offline)
 gvf_gtest(test_offline
   SOURCES test/offline/test_detection_bag.cpp test/offline/test_kitti_bag_writer.cpp
@@ -165,7 +166,7 @@ catkin_run_tests_target("suite" "scenario_suite_short" "suite-scenario_suite_sho
 # And the real YOLOv5s on the KITTI samples (test_yolov5s_model; through
 # YoloDetector: test_yolo_onnx_model.cpp in test_detection), SKIPPED (listed, never passed)
 # until scripts/fetch_model.sh has fetched it (doc/detectors.md).
-foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model
+foreach(script test_summarize_test_results test_tfjs_to_onnx test_fetch_model test_yolov5s_model test_launch_failures
     test_calibrate_detector_noise)
   set(GVF_SCRIPT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/python-${script}.xml)
   catkin_run_tests_target("python" "${script}" "python-${script}.xml"

@@ -322,6 +322,14 @@ int run(const Options& o)
                              std::to_string(o.bag.stamp_tolerance_s) + " s of a time stamp of " + o.drive +
                              "/image_02/timestamps.txt: is the bag from this drive?");
   }
+  if (bag.detections.empty())
+  {
+    std::cerr
+        << "warning: the " << s.messages << " messages on " << o.bag.topic
+        << " hold no object, so every labelled object counts as missed: the detector found nothing (a "
+           "model trained on COCO finds nothing on a synthetic drive's flat-shaded boxes: replay its label_2 "
+           "with --backend replay), or the fusion dropped the boxes (see the drops run_pipeline prints)\n";
+  }
   if (s.unmatched > 0)
   {
     std::cerr << "warning: " << s.unmatched << " messages have no image time stamp within "

@@ -1,6 +1,4 @@
 // grid_vision_fusion/dynamic_grid: lidar PointCloud2 + tf -> CMCDOT-style dynamic occupancy grid.
-#include <diagnostic_updater/diagnostic_updater.h>
-#include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
@@ -19,6 +17,7 @@
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
 #include "grid_vision_fusion/ros_stages/grid_stage.h"
+#include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 #include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
@@ -46,6 +45,8 @@ class DynamicGridNodelet : public nodelet::Nodelet
   std::mutex filter_mutex_;  // the stage and its statistics
   std::unique_ptr<GridStage> stage_;
   std::string fixed_frame_;
+  // The flow on /diagnostics (reads the stage; the callbacks below feed it: declared between).
+  std::unique_ptr<StageDiagnostics> diagnostics_;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -60,12 +61,7 @@ class DynamicGridNodelet : public nodelet::Nodelet
   ros::Publisher pub_cells_;
   std::unique_ptr<ReconfigureServer> reconfigure_server_;
 
-  // Diagnostics (under filter_mutex_).
-  std::unique_ptr<diagnostic_updater::Updater> updater_;
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> input_rate_;
-  ros::WallTimer diagnostics_timer_;
-  double min_rate_ = 0.0;
-  double max_rate_ = 0.0;
+  // Diagnostics figures (under filter_mutex_).
   double last_processing_ms_ = 0.0;
   double max_processing_ms_ = 0.0;
   std::size_t particles_in_use_ = 0;
@@ -88,8 +84,11 @@ void DynamicGridNodelet::onInit()
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("dynamic_grid: invalid configuration, the nodelet stays inactive: %s", e.what());
-    return;
+    NODELET_ERROR(
+        "dynamic_grid: cannot start, the nodelet is not loaded (the manager runs on; a loader started with "
+        "required=\"true\" ends its launch): %s",
+        e.what());
+    throw;
   }
   for (const std::string& warning : unknown)
   {
@@ -113,20 +112,13 @@ void DynamicGridNodelet::onInit()
   tf_queue_->setTargetFrames({fixed_frame_});
   tf_polling_ = std::make_unique<TfWaitPolling>(*tf_buffer_, nh, [this] { tf_queue_->poll(); });
 
-  updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  updater_->setHardwareID("none");
-  min_rate_ = 0.5 * params.expected_rate;
-  max_rate_ = 2.0 * params.expected_rate;
-  input_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
-      diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 10), "input rate");
-  updater_->add(*input_rate_);
-  updater_->add("dynamic grid", this, &DynamicGridNodelet::diagnose);
-  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
-                                          [this](const ros::WallTimerEvent&)
-                                          {
-                                            std::lock_guard<std::mutex> lock(filter_mutex_);
-                                            updater_->update();
-                                          });
+  diagnostics_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, getName(), "none", std::vector<std::pair<std::string, std::string>>{{"scans", "points"}},
+      [this](diagnostic_updater::DiagnosticStatusWrapper& status)
+      {
+        std::lock_guard<std::mutex> lock(filter_mutex_);
+        diagnose(status);
+      });
 
   ros::SubscriberStatusCallback connect_cb = boost::bind(&DynamicGridNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
@@ -167,7 +159,11 @@ void DynamicGridNodelet::subscribePoints()
   // cloudCb or tfFailureCb follows.
   sub_points_ = getNodeHandle().subscribe<sensor_msgs::PointCloud2>(
       "points", static_cast<std::uint32_t>(stage_->params().queue_size),
-      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud) { tf_queue_->add(cloud); });
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud)
+      {
+        diagnostics_->input("scans");
+        tf_queue_->add(cloud);
+      });
 }
 
 void DynamicGridNodelet::reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t /*level*/)
@@ -196,6 +192,7 @@ void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& c
   }
   const char* why = reason == TfWaitDrop::kEmptyFrameId ? "the cloud has an empty frame_id"
                                                         : "no transform within the queue";
+  diagnostics_->drop("no tf", fixed_frame_ + " <- '" + cloud_msg->header.frame_id + "': " + why);
   NODELET_WARN_THROTTLE(kThrottleS,
                         "dynamic_grid: dropping the scan of %s at t=%.3f: no tf %s <- '%s' at its stamp (%s)",
                         sub_points_.getTopic().c_str(), cloud_msg->header.stamp.toSec(), fixed_frame_.c_str(),
@@ -206,7 +203,6 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
 {
   const auto start = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(filter_mutex_);
-  input_rate_->tick();
   DynamicGridCycle cycle;
   try
   {
@@ -215,6 +211,7 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   catch (const UnusableMessage& e)
   {
     ++unusable_clouds_;
+    diagnostics_->drop("unusable cloud", e.what());
     NODELET_ERROR_THROTTLE(kThrottleS,
                            "dynamic_grid: cannot use the clouds of %s (frame '%s', t=%.3f): %s; they need "
                            "float32 x, y, z fields, little-endian, and the data their size claims. Dropped.",
@@ -225,6 +222,7 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   catch (const tf2::TransformException& e)
   {
     ++tf_drops_;
+    diagnostics_->drop("no tf", e.what());
     NODELET_WARN_THROTTLE(kThrottleS, "dynamic_grid: dropping the scan of %s: tf %s <- %s: %s",
                           sub_points_.getTopic().c_str(), fixed_frame_.c_str(),
                           cloud_msg->header.frame_id.c_str(), e.what());
@@ -262,6 +260,7 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
   {
     pub_grid_.publish(stage_->gridMsg());
   }
+  diagnostics_->output(cloud_msg->header.stamp);
   last_processing_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   max_processing_ms_ = std::max(max_processing_ms_, last_processing_ms_);
@@ -270,18 +269,11 @@ void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud
 void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
   const double budget_ms = 1e3 / stage_->params().expected_rate;
-  if (scans_ == 0)
+  if (scans_ > 0 && last_processing_ms_ > budget_ms)
   {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "no scan processed yet");
-  }
-  else if (last_processing_ms_ > budget_ms)
-  {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                    "processing %.1f ms exceeds the scan period %.1f ms", last_processing_ms_, budget_ms);
-  }
-  else
-  {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "processing %.1f ms exceeds the scan period %.1f ms", last_processing_ms_,
+                         budget_ms);
   }
   status.add("processing time last [ms]", last_processing_ms_);
   status.add("processing time max [ms]", max_processing_ms_);

@@ -27,6 +27,7 @@
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 #include "grid_vision_fusion/ros/sensor_views.h"
 #include "grid_vision_fusion/ros_stages/fusion_stage.h"
+#include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 
 namespace grid_vision_fusion
 {
@@ -53,6 +54,7 @@ class FusionNodelet : public nodelet::Nodelet
   boost::mutex connect_mutex_;
   std::mutex stage_mutex_;  // the stage (its configuration changes with dynamic_reconfigure)
   std::unique_ptr<FusionStage> stage_;
+  std::unique_ptr<StageDiagnostics> diagnostics_;  // the flow on /diagnostics, fed by the callbacks below
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   message_filters::Subscriber<Detection2DArray> sub_detections_;
@@ -81,8 +83,11 @@ void FusionNodelet::onInit()
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("fusion: invalid configuration, the nodelet stays inactive: %s", e.what());
-    return;
+    NODELET_ERROR(
+        "fusion: cannot start, the nodelet is not loaded (the manager runs on; a loader started with "
+        "required=\"true\" ends its launch): %s",
+        e.what());
+    throw;
   }
   for (const std::string& warning : unknown)
   {
@@ -94,6 +99,15 @@ void FusionNodelet::onInit()
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
   reconfigure_server_->setCallback(
       boost::bind(&FusionNodelet::reconfigureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+
+  diagnostics_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, getName(), "none",
+      std::vector<std::pair<std::string, std::string>>{{"detections", "detections"},
+                                                       {"projected grids", "projected_grid"}});
+  sub_detections_.registerCallback(boost::function<void(const Detection2DArray::ConstPtr&)>(
+      [this](const Detection2DArray::ConstPtr&) { diagnostics_->input("detections"); }));
+  sub_grid_.registerCallback(boost::function<void(const ProjectedGrid::ConstPtr&)>(
+      [this](const ProjectedGrid::ConstPtr&) { diagnostics_->input("projected grids"); }));
 
   if (approximate_sync)
   {
@@ -217,6 +231,7 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
   }
   catch (const std::invalid_argument& e)
   {
+    diagnostics_->drop("pair refused", e.what());
     NODELET_WARN_THROTTLE(kThrottleS, "fusion: dropping the pair at t=%.3f (%s + %s): %s",
                           detections_msg->header.stamp.toSec(), sub_detections_.getTopic().c_str(),
                           sub_grid_.getTopic().c_str(), e.what());
@@ -255,6 +270,7 @@ void FusionNodelet::fusionCb(const Detection2DArray::ConstPtr& detections_msg,
     publishOverlay(*detections_msg, detections, result, points, config);
   }
   pub_objects_.publish(objects);
+  diagnostics_->output(detections_msg->header.stamp);
 }
 
 void FusionNodelet::publishOverlay(const Detection2DArray& detections_msg,

@@ -32,6 +32,7 @@
 #include "grid_vision_fusion/ros/sensor_views.h"
 #include "grid_vision_fusion/ros_stages/projection_stage.h"
 #include "grid_vision_fusion/ros_sync/grid_for_image.h"
+#include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 #include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
@@ -73,6 +74,7 @@ class GridProjectionNodelet : public nodelet::Nodelet
 
   boost::mutex connect_mutex_;
   std::unique_ptr<ProjectionStage> stage_;
+  std::unique_ptr<StageDiagnostics> diagnostics_;  // the flow on /diagnostics, fed by the callbacks below
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -105,8 +107,12 @@ void GridProjectionNodelet::onInit()
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("grid_projection: invalid configuration, the nodelet stays inactive: %s", e.what());
-    return;
+    NODELET_ERROR(
+        "grid_projection: cannot start, the nodelet is not loaded (the manager runs on; a loader started "
+        "with "
+        "required=\"true\" ends its launch): %s",
+        e.what());
+    throw;
   }
   for (const std::string& warning : unknown)
   {
@@ -115,6 +121,9 @@ void GridProjectionNodelet::onInit()
   const GridProjectionParams& params = stage_->params();
   const GridProjectionConfig& config = params.projection;
 
+  diagnostics_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, getName(), "none",
+      std::vector<std::pair<std::string, std::string>>{{"grids", "grid"}, {"camera_infos", "camera_info"}});
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   pairing_ = std::make_unique<Pairing>(params.grid_sync_tolerance);
@@ -193,9 +202,11 @@ void GridProjectionNodelet::connectCb()
 
 void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
 {
+  diagnostics_->input("grids");
   const std::string error = checkDynamicGrid(*grid_msg);
   if (!error.empty())
   {
+    diagnostics_->drop("unusable grid", error);
     NODELET_WARN_THROTTLE(kThrottleS, "grid_projection: dropping the grid at t=%.3f on %s: %s",
                           grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(), error.c_str());
     return;
@@ -212,6 +223,7 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
 
 void GridProjectionNodelet::cameraInfoInCb(const sensor_msgs::CameraInfo::ConstPtr& info_msg)
 {
+  diagnostics_->input("camera_infos");
   queuePairs(pairing_->addInfo(info_msg));
 }
 
@@ -221,6 +233,7 @@ void GridProjectionNodelet::queuePairs(const std::vector<Pairing::Pair>& pairs)
   {
     if (!pair.grid)
     {
+      diagnostics_->drop("no grid yet");
       NODELET_WARN_THROTTLE(kThrottleS,
                             "grid_projection: camera_info at t=%.3f but no grid received yet on %s",
                             pair.info->header.stamp.toSec(), sub_grid_.getTopic().c_str());
@@ -240,6 +253,8 @@ void GridProjectionNodelet::tfFailureCb(const boost::shared_ptr<const Projection
   const char* why = reason == TfWaitDrop::kEmptyFrameId
                         ? "the camera_info has an empty frame_id"
                         : "its tf did not arrive within ~queue_size camera_infos";
+  diagnostics_->drop("no tf",
+                     "'" + info_msg->header.frame_id + "' <- " + joinFrames(request->frames) + ": " + why);
   NODELET_WARN_THROTTLE(
       kThrottleS,
       "grid_projection: dropping the camera_info of %s at t=%.3f: no tf '%s' <- %s at its stamp "
@@ -260,6 +275,7 @@ void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequ
   }
   catch (const ProjectionSkipped& e)
   {
+    diagnostics_->drop("projection skipped", e.what());
     NODELET_WARN_THROTTLE(kThrottleS,
                           "grid_projection: camera_info of %s at t=%.3f with the grid of %s: %s; nothing "
                           "published",
@@ -287,6 +303,7 @@ void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequ
     publishMatchedOverlay();
   }
   pub_projected_.publish(projected);
+  diagnostics_->output(info_msg->header.stamp);
 }
 
 void GridProjectionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)

@@ -1,7 +1,6 @@
 // grid_vision_fusion/yolo_detector: image → Detection2DArray, by a YOLO network on OpenCV DNN
 // (backend "opencv_dnn") or from per-frame KITTI label files (backend "replay").
 #include <cv_bridge/cv_bridge.h>
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -21,6 +20,7 @@
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros_stages/detector_stage.h"
 #include "grid_vision_fusion/ros_sync/owned_callbacks.h"
+#include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 
 namespace grid_vision_fusion
 {
@@ -56,6 +56,7 @@ private:
 
   boost::mutex connect_mutex_;
   std::unique_ptr<DetectorStage> stage_;  // detect() by one process() at a time; frameIndex() by imageCb
+  std::unique_ptr<StageDiagnostics> diagnostics_;  // the flow on /diagnostics, fed by the callbacks below
 
   std::mutex config_mutex_;  // guards the thresholds
   double score_threshold_ = 0.0;
@@ -86,8 +87,6 @@ private:
   ros::Publisher pub_detections_;
   image_transport::Publisher pub_image_;
   std::unique_ptr<ReconfigureServer> reconfigure_server_;
-  std::unique_ptr<diagnostic_updater::Updater> updater_;
-  ros::WallTimer diagnostics_timer_;
 };
 
 YoloDetectorNodelet::~YoloDetectorNodelet()
@@ -109,9 +108,11 @@ void YoloDetectorNodelet::onInit()
   }
   catch (const std::exception& e)
   {
-    NODELET_ERROR("yolo_detector: cannot start, the nodelet stays inactive and publishes nothing: %s",
-                  e.what());
-    return;
+    NODELET_ERROR(
+        "yolo_detector: cannot start, the nodelet is not loaded (the manager runs on; a loader started with "
+        "required=\"true\" ends its launch): %s",
+        e.what());
+    throw;
   }
   for (const std::string& warning : unknown)
   {
@@ -125,12 +126,11 @@ void YoloDetectorNodelet::onInit()
   score_threshold_ = params.yolo.score_threshold;
   nms_threshold_ = params.yolo.nms_threshold;
 
-  updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  updater_->setHardwareID(params.backend == "replay" ? "replay " + params.replay.directory
-                                                     : params.yolo.model_path);
-  updater_->add("yolo_detector", this, &YoloDetectorNodelet::diagnose);
-  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.1, updater_->getPeriod())),
-                                          [this](const ros::WallTimerEvent&) { updater_->update(); });
+  diagnostics_ = std::make_unique<StageDiagnostics>(
+      nh, pnh, getName(),
+      params.backend == "replay" ? "replay " + params.replay.directory : params.yolo.model_path,
+      std::vector<std::pair<std::string, std::string>>{{"images", "image"}},
+      [this](diagnostic_updater::DiagnosticStatusWrapper& status) { diagnose(status); });
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
   reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this,
@@ -190,8 +190,10 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
   {
     NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f skipped: %s",
                            sub_image_.getTopic().c_str(), image_msg->header.stamp.toSec(), e.what());
+    diagnostics_->drop("no frame index", e.what());
     return;
   }
+  diagnostics_->input("images");
   bool schedule = false;
   {
     std::lock_guard<std::mutex> lock(slot_mutex_);
@@ -199,6 +201,7 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
     if (pending_.image)
     {
       ++frames_dropped_;  // inference is slower than the camera: the older frame is dropped
+      diagnostics_->drop("older image replaced by a newer one (inference slower than the camera)");
     }
     pending_ = {image_msg, frame_index};
     schedule = !worker_scheduled_;
@@ -252,6 +255,7 @@ bool YoloDetectorNodelet::detect(const PendingFrame& frame, std::vector<Detectio
     NODELET_ERROR_THROTTLE(kThrottleS, "yolo_detector: image on %s at t=%.3f (%ux%u, %s) not processed: %s",
                            sub_image_.getTopic().c_str(), image.header.stamp.toSec(), image.width,
                            image.height, image.encoding.c_str(), e.what());
+    diagnostics_->drop("image not processed", e.what());
   }
   return false;
 }
@@ -286,6 +290,7 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   }
   pub_detections_.publish(
       detectionsToMsg(frame.image->header, frame.image->width, frame.image->height, detections));
+  diagnostics_->output(frame.image->header.stamp);
 }
 
 void YoloDetectorNodelet::publishImage(const sensor_msgs::Image::ConstPtr& image_msg,
@@ -311,19 +316,15 @@ void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& 
   std::lock_guard<std::mutex> lock(slot_mutex_);
   if (frames_failed_ > failed_reported_)
   {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
-                    "%lu images could not be processed since the last report",
-                    static_cast<unsigned long>(frames_failed_ - failed_reported_));
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
+                         "%lu images could not be processed since the last report",
+                         static_cast<unsigned long>(frames_failed_ - failed_reported_));
   }
   else if (frames_dropped_ > dropped_reported_)
   {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                    "%lu frames dropped since the last report: inference slower than the camera",
-                    static_cast<unsigned long>(frames_dropped_ - dropped_reported_));
-  }
-  else
-  {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "detecting");
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "%lu frames dropped since the last report: inference slower than the camera",
+                         static_cast<unsigned long>(frames_dropped_ - dropped_reported_));
   }
   dropped_reported_ = frames_dropped_;
   failed_reported_ = frames_failed_;

@@ -621,6 +621,33 @@ std::vector<Case> cases()
          b.pub_grid_.publish(makeGrid(back));
        },
        "more than max_grid_age", "projection/skipped"},
+      {"GridsWithoutCameraInfo", "grid_projection",
+       [](Bench& b)
+       {
+         // A bag without camera_info: grids come, nothing is projected; after a second the nodelet
+         // names the silent topic.
+         waitFor([&] { return b.logged("but no camera_infos on /bad/camera_info"); }, kLogTimeoutS,
+                 [&] { b.pub_grid_.publish(makeGrid(b.next("grid_projection"))); });
+       },
+       "grids arrive on /bad/grid_in but no camera_infos on /bad/camera_info for", "projection/stall"},
+      {"DetectionsWithoutProjectedGrids", "fusion",
+       [](Bench& b)
+       {
+         std::vector<ros::Time> stamps;
+         waitFor([&] { return b.logged("but no projected grids on /bad/projected_grid_in"); }, kLogTimeoutS,
+                 [&]
+                 {
+                   stamps.push_back(b.next("fusion"));
+                   b.pub_detections_.publish(makeDetections(stamps.back()));
+                 });
+         // Their grids come late: the synchronizer's queue is emptied for the cases after this one.
+         for (const ros::Time& stamp : stamps)
+         {
+           b.pub_projected_.publish(makeProjected(stamp));
+         }
+       },
+       "detections arrive on /bad/detections_in but no projected grids on /bad/projected_grid_in for",
+       "fusion/stall"},
       {"ModelFileReplacedWhileRunning", "yolo_detector",
        [](Bench& b)
        {

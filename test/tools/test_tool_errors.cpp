@@ -273,6 +273,34 @@ TEST_F(ToolErrors, EvaluatePointsToLabelsForADriveWithoutTracklets)
       << labelled.output;
 }
 
+TEST_F(ToolErrors, EvaluateSaysWhyThereAreNoDetections)
+{
+  const fs::path output = work_ / "evaluation";
+  // A bag without /objects (the sensor bag itself) is an error listing the bag's topics.
+  Result result = run(std::string(EVALUATE) + " --drive " + drive_.string() + " --detections " +
+                      full_bag_.string() + " --output " + output.string());
+  EXPECT_NE(result.status, 0) << result.output;
+  EXPECT_NE(result.output.find(full_bag_.string() + ": no message on topic /objects (topics: "),
+            std::string::npos)
+      << result.output;
+  // Object arrays without an object (a replay of empty label files): a warning saying why.
+  const fs::path empty_labels = work_ / "no_labels";
+  fs::create_directories(empty_labels);
+  const fs::path objects = work_ / "objects.bag";
+  result =
+      run(std::string(RUN_PIPELINE) + " -q --bag " + full_bag_.string() + " --output " + objects.string() +
+          " --config-dir " GVF_SOURCE_DIR "/config --backend replay --replay-directory " +
+          empty_labels.string() + " --param yolo_detector/replay/missing_file_is_empty=true");
+  ASSERT_EQ(result.status, 0) << result.output;
+  result = run(std::string(EVALUATE) + " --drive " + drive_.string() + " --detections " + objects.string() +
+               " --output " + output.string());
+  EXPECT_EQ(result.status, 0) << result.output;
+  EXPECT_NE(
+      result.output.find("messages on /objects hold no object, so every labelled object counts as missed"),
+      std::string::npos)
+      << result.output;
+}
+
 TEST_F(ToolErrors, MakeSyntheticDriveNamesAMissingScenario)
 {
   const fs::path kept = work_ / "kitti" / "2011_09_26" / "2011_09_26_drive_9001_sync" / "marker.txt";
