@@ -73,7 +73,8 @@ void StageMonitor::output(double now, double stamp)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   restartIfBackwards(now);
-  outputs_.emplace_back(now, now - stamp);
+  // A bag's /clock (100 Hz from rosbag play) may lag the stamps of its messages by a tick.
+  outputs_.emplace_back(now, std::max(0.0, now - stamp));
   while (!outputs_.empty() && outputs_.front().first < now - window_s_)
   {
     outputs_.pop_front();

@@ -6,11 +6,14 @@
 
 #include <algorithm>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 
+#include <map>
 #include <mutex>
 #include <set>
+#include <string>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
@@ -43,6 +46,18 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
                                                             std::lock_guard<std::mutex> lock(mutex);
                                                             received.push_back(m);
                                                           });
+  // The four nodelets' flow on /diagnostics (doc/reliability.md): the latest status of each.
+  std::map<std::string, diagnostic_msgs::DiagnosticStatus> diagnostics;
+  ros::Subscriber sub_diagnostics =
+      nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100,
+                                                     [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m)
+                                                     {
+                                                       std::lock_guard<std::mutex> lock(mutex);
+                                                       for (const auto& status : m->status)
+                                                       {
+                                                         diagnostics[status.name] = status;
+                                                       }
+                                                     });
   // The bag is played with a start delay; wait for its end (the last frame's objects or a
   // pause of 8 s once objects came).
   const ros::Time last_stamp(drive.stamps.back().sec, drive.stamps.back().nsec);
@@ -63,6 +78,27 @@ TEST(KittiReplay, MotionLabelsMatchTheGroundTruth)
       90.0))
       << "no objects from the chain";
   ASSERT_GE(received.size(), static_cast<std::size_t>(frames) / 2) << "the chain lost most frames";
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const char* nodelet : {"dynamic_grid", "yolo_detector", "grid_projection", "fusion"})
+    {
+      const auto status =
+          std::find_if(diagnostics.begin(), diagnostics.end(),
+                       [&](const auto& s) { return s.first.find(nodelet) != std::string::npos; });
+      ASSERT_NE(status, diagnostics.end()) << "no status of " << nodelet << " on /diagnostics";
+      std::map<std::string, std::string> values;
+      for (const auto& kv : status->second.values)
+      {
+        values[kv.key] = kv.value;
+      }
+      for (const char* key : {"output rate [Hz]", "latency from the sensor stamp, median [s]", "outputs"})
+      {
+        EXPECT_EQ(values.count(key), 1U) << nodelet << " lacks " << key;
+      }
+      EXPECT_GT(std::stoul(values["outputs"]), 0UL) << nodelet;
+      EXPECT_GE(std::stod(values["latency from the sensor stamp, median [s]"]), 0.0) << nodelet;
+    }
+  }
 
   // The objects as evaluation detections, frame by frame.
   const KittiGroundTruthConfig labels;

@@ -23,7 +23,8 @@ public:
 
   /// An input message arrived at `now`.
   void input(const std::string& name, double now);
-  /// An output was published at `now` for a sensor message stamped `stamp`.
+  /// An output was published at `now` for a sensor message stamped `stamp` (latency now − stamp,
+  /// at least 0: under use_sim_time the bag's clock may lag its messages by a tick).
   void output(double now, double stamp);
   /// An input dropped: counted under `reason` (a short fixed phrase); `detail` is the last
   /// message of that kind, shown with the count.
