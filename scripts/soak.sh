@@ -13,6 +13,7 @@
 #   --keep           keep the drive and the bag (several GB for the default drive)
 #   --model M --weights FILE   run the network (OpenCV DNN) instead of replaying the labels,
 #                    e.g. models/yolo/yolov3-tiny.cfg and weights from `bench_yolo --write-weights`
+#   -- ARG...        further kitti_replay.launch arguments, e.g. grid_config:=/tmp/grid.yaml
 # Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames), DIR/replay.log.
 set -eo pipefail
 
@@ -31,7 +32,8 @@ while [[ $# -gt 0 ]]; do
     --keep) keep=true ;;
     --model) detector+=(model:="$(realpath "$2")"); shift ;;
     --weights) detector+=(weights:="$(realpath "$2")"); shift ;;
-    -h | --help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --) shift; detector+=("$@"); break ;;
+    -h | --help) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "soak: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -83,6 +85,9 @@ json.dump(figures, open(out + "/soak.json", "w"), indent=1)
 print("[soak] images %d, detections %d, objects %d: %d frames lost after the first output "
       "(%d images before it)" % (monitor["images"], monitor["detections"], monitor["objects"], lost,
                                  monitor["images_before_first_output"]))
+if monitor["latency_frames"]:
+    print("[soak] wall-clock latency from a frame's arrival to its objects: median %.3f s, p99 %.3f s (%d frames)"
+          % (monitor["latency_median_s"], monitor["latency_p99_s"], monitor["latency_frames"]))
 print("[soak] manager resident memory frame 500 -> end: %s -> %s MiB (%+.1f %%)" %
       (figures["rss_frame_500_mib"], figures["rss_end_mib"], growth))
 print("[soak] errors logged: %d" % len(monitor["errors"]))

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Watches a running nodelet chain for scripts/soak.sh: counts the camera images, detections and
-objects messages, samples the nodelet manager's resident memory, and collects every ERROR or
-FATAL that reaches /rosout. Writes CSV samples and a JSON summary when the bag has been played
-(the player's node leaves the graph) or on SIGINT.
+objects messages, measures the wall-clock latency from a frame's arrival (its camera_info, which
+the bag plays with the scan and the image of the same stamp) to its objects, samples the nodelet
+manager's resident memory, and collects every ERROR or FATAL that reaches /rosout. Writes CSV
+samples and a JSON summary when the bag has been played (the player's node leaves the graph) or on
+SIGINT.
 """
 import argparse
 import json
@@ -34,6 +36,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--manager-pid", type=int, required=True)
     parser.add_argument("--image", default="/kitti/camera_color_left/image_raw")
+    parser.add_argument("--camera-info", default="/kitti/camera_color_left/camera_info")
     parser.add_argument("--samples", required=True, help="CSV file of the memory samples")
     parser.add_argument("--summary", required=True, help="JSON summary file")
     parser.add_argument("--every", type=int, default=100, help="objects messages between samples")
@@ -42,6 +45,7 @@ def main():
 
     counts = {"images": 0, "detections": 0, "objects": 0}
     stamps = {"images": set(), "objects": set()}
+    arrivals = {"camera_info": {}, "objects": {}}  # header stamp [ns] -> first wall arrival [s]
     errors = []
     samples = open(args.samples, "w")
     samples.write("objects_messages,wall_s,manager_rss_mib\n")
@@ -58,6 +62,11 @@ def main():
                 samples.flush()
         return callback
 
+    def arrival(name):
+        def callback(msg):
+            arrivals[name].setdefault(header_stamp(msg), time.time())
+        return callback
+
     def on_log(msg):
         if msg.level >= Log.ERROR:
             errors.append("%s: %s" % (msg.name, msg.msg))
@@ -66,6 +75,8 @@ def main():
     rospy.Subscriber(args.image, rospy.AnyMsg, counter("images"), queue_size=100)
     rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=100)
     rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=100)
+    rospy.Subscriber("/objects", rospy.AnyMsg, arrival("objects"), queue_size=100)
+    rospy.Subscriber(args.camera_info, rospy.AnyMsg, arrival("camera_info"), queue_size=100)
     rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000)
 
     stop = {"now": False}
@@ -87,7 +98,11 @@ def main():
     # Images before the chain's first output met a chain still starting (no grid yet).
     first = min(stamps["objects"]) if stamps["objects"] else None
     lost = sorted(t for t in stamps["images"] if first is not None and t > first and t not in stamps["objects"])
+    latencies = sorted(t - arrivals["camera_info"][s] for s, t in arrivals["objects"].items()
+                       if s in arrivals["camera_info"])
+    percentile = (lambda q: latencies[min(len(latencies) - 1, int(q * len(latencies)))] if latencies else None)
     summary = dict(counts, errors=errors, wall_s=time.time() - start,
+                   latency_median_s=percentile(0.5), latency_p99_s=percentile(0.99), latency_frames=len(latencies),
                    images_before_first_output=sum(1 for t in stamps["images"] if first is None or t < first),
                    frames_lost=len(lost), lost_stamps_ns=lost[:100])
     with open(args.summary, "w") as out:
