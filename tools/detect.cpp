@@ -146,7 +146,6 @@ std::map<std::string, std::string> parseClassMap(const std::string& text)
 /// Parses the command line; false when --help was asked for.
 bool parseArguments(int argc, char** argv, Options& o)
 {
-  bool& all_classes = o.all_classes;
   bool options_ended = false;
   for (int i = 1; i < argc; ++i)
   {
@@ -173,7 +172,7 @@ bool parseArguments(int argc, char** argv, Options& o)
     else if (arg == "-q" || arg == "--quiet")
       o.quiet = true;
     else if (arg == "--all-classes")
-      all_classes = true;
+      o.all_classes = true;
     else if (arg == "--model")
       o.model = value();
     else if (arg == "--weights")
@@ -215,11 +214,11 @@ bool parseArguments(int argc, char** argv, Options& o)
   {
     throw UsageError("no IMAGES given");
   }
-  if (all_classes && o.class_map)
+  if (o.all_classes && o.class_map)
   {
     throw UsageError("--class-map and --all-classes exclude each other");
   }
-  if (all_classes)
+  if (o.all_classes)
   {
     o.class_map.emplace();
   }
