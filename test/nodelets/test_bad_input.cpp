@@ -633,21 +633,21 @@ std::vector<Case> cases()
       {"DetectionsWithoutProjectedGrids", "fusion",
        [](Bench& b)
        {
-         std::vector<ros::Time> stamps;
+         ros::Time last;
          waitFor([&] { return b.logged("but no projected grids on /bad/projected_grid_in"); }, kLogTimeoutS,
                  [&]
                  {
-                   stamps.push_back(b.next("fusion"));
-                   b.pub_detections_.publish(makeDetections(stamps.back()));
+                   last = b.next("fusion");
+                   b.pub_detections_.publish(makeDetections(last));
                  });
-         // Their grids come late: the synchronizer's queue is emptied for the cases after this one.
-         for (const ros::Time& stamp : stamps)
-         {
-           b.pub_projected_.publish(makeProjected(stamp));
-         }
+         // The newest one's grid comes late: its pair is fused, which clears the synchronizer's
+         // older unmatched detections, and the tracks reset after the gap (hence the site).
+         b.bad_outputs_.insert(last);
+         b.pub_projected_.publish(makeProjected(last));
+         waitFor([&] { return b.output("fusion", last); }, kOutputTimeoutS);  // the reset is logged by then
        },
        "detections arrive on /bad/detections_in but no projected grids on /bad/projected_grid_in for",
-       "fusion/stall"},
+       "fusion/reset"},
       {"ModelFileReplacedWhileRunning", "yolo_detector",
        [](Bench& b)
        {
