@@ -91,6 +91,10 @@ private:
 
 YoloDetectorNodelet::~YoloDetectorNodelet()
 {
+  if (diagnostics_)
+  {
+    diagnostics_->stop();
+  }
   sub_image_.shutdown();
   inference_.end();  // waits for a running inference; the queued ones do nothing
 }

@@ -36,6 +36,11 @@ public:
     timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { tick(); });
   }
 
+  /// Stops the once-a-second report. A nodelet's destructor calls it first: the manager may
+  /// delete a nodelet from a worker thread while the process ends, and the timer is best taken
+  /// off roscpp's timer manager before anything waits.
+  void stop() { timer_.stop(); }
+
   void input(const std::string& name) { monitor_.input(name, ros::Time::now().toSec()); }
   void output(const ros::Time& sensor_stamp)
   {
