@@ -467,10 +467,19 @@ std::string toString(ResizeMode mode)
   return mode == ResizeMode::kLetterbox ? "letterbox" : "resize";
 }
 
+ModelFormat modelFormat(const std::string& model_path)
+{
+  if (endsWith(model_path, ".cfg"))
+  {
+    return ModelFormat::kDarknet;
+  }
+  return endsWith(model_path, ".onnx") ? ModelFormat::kOnnx : ModelFormat::kUnknown;
+}
+
 void YoloDetectorConfig::validate() const
 {
-  const bool darknet = endsWith(model_path, ".cfg");
-  const bool onnx = endsWith(model_path, ".onnx");
+  const bool darknet = modelFormat(model_path) == ModelFormat::kDarknet;
+  const bool onnx = modelFormat(model_path) == ModelFormat::kOnnx;
   if (!darknet && !onnx)
   {
     throw std::invalid_argument("model must name a Darknet .cfg or an .onnx file, got \"" + model_path +
@@ -767,7 +776,7 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
   const WinogradConvolutionScope winograd(config_.winograd && config_.backend == "opencv" &&
                                           config_.target == "cpu");
   winograd_used_ = winograd.active();
-  const bool darknet = endsWith(config_.model_path, ".cfg");
+  const bool darknet = modelFormat(config_.model_path) == ModelFormat::kDarknet;
   try
   {
     if (darknet)

@@ -7,6 +7,25 @@ namespace grid_vision_fusion
 {
 namespace
 {
+/// Drops the items of `items` (oldest first) whose time, time_of(item), is before `oldest`.
+template <typename T, typename TimeOf>
+void dropBefore(std::deque<T>& items, double oldest, TimeOf time_of)
+{
+  while (!items.empty() && time_of(items.front()) < oldest)
+  {
+    items.pop_front();
+  }
+}
+
+double itself(double t)
+{
+  return t;
+}
+double timeOfOutput(const std::pair<double, double>& output)
+{
+  return output.first;
+}
+
 std::string seconds(double s)
 {
   char text[32];
@@ -42,14 +61,6 @@ void StageMonitor::restartIfBackwards(double now)
   latest_ = now;
 }
 
-void StageMonitor::trim(std::deque<double>& times, double now) const
-{
-  while (!times.empty() && times.front() < now - window_s_)
-  {
-    times.pop_front();
-  }
-}
-
 void StageMonitor::input(const std::string& name, double now)
 {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -60,7 +71,7 @@ void StageMonitor::input(const std::string& name, double now)
     {
       entry.second.arrivals.push_back(now);
       entry.second.last = now;
-      trim(entry.second.arrivals, now);
+      dropBefore(entry.second.arrivals, now - window_s_, itself);
     }
   }
   if (first_input_ < 0.0)
@@ -75,10 +86,7 @@ void StageMonitor::output(double now, double stamp)
   restartIfBackwards(now);
   // A bag's /clock (100 Hz from rosbag play) may lag the stamps of its messages by a tick.
   outputs_.emplace_back(now, std::max(0.0, now - stamp));
-  while (!outputs_.empty() && outputs_.front().first < now - window_s_)
-  {
-    outputs_.pop_front();
-  }
+  dropBefore(outputs_, now - window_s_, timeOfOutput);
   last_output_ = now;
   ++output_count_;
 }
@@ -101,13 +109,10 @@ StageMonitor::Report StageMonitor::report(double now, double silence_s)
   const double span = first_input_ < 0.0 ? window_s_ : std::clamp(now - first_input_, 1.0, window_s_);
   for (auto& [name, channel] : inputs_)
   {
-    trim(channel.arrivals, now);
+    dropBefore(channel.arrivals, now - window_s_, itself);
     report.input_rate_hz[name] = static_cast<double>(channel.arrivals.size()) / span;
   }
-  while (!outputs_.empty() && outputs_.front().first < now - window_s_)
-  {
-    outputs_.pop_front();
-  }
+  dropBefore(outputs_, now - window_s_, timeOfOutput);
   report.output_rate_hz = static_cast<double>(outputs_.size()) / span;
   if (!outputs_.empty())
   {

@@ -54,6 +54,15 @@ YoloOutputLayout yoloOutputLayoutFromString(const std::string& name);
 /// The name parsed by yoloOutputLayoutFromString().
 std::string toString(YoloOutputLayout layout);
 
+/// The kind of model a file is, by its name: a Darknet cfg (".cfg"), an ONNX model (".onnx").
+enum class ModelFormat
+{
+  kDarknet,
+  kOnnx,
+  kUnknown,
+};
+ModelFormat modelFormat(const std::string& model_path);
+
 /// Parameters of the detector.
 struct YoloDetectorConfig
 {

@@ -55,7 +55,6 @@ private:
     double last = -1.0;           ///< -1: never
   };
   void restartIfBackwards(double now);
-  void trim(std::deque<double>& times, double now) const;
 
   std::mutex mutex_;
   double window_s_;
