@@ -619,6 +619,7 @@ DynamicGridCycle DynamicGridFilter::update(const PointCloudView& cloud,
   moveGrid(world_from_sensor, first, cycle);
   initialised_ = true;
   last_stamp_ = stamp;
+  last_received_stamp_ = stamp;
   ground_z_ = world_from_sensor.translation().z() - config_.sensor_model.sensor_height;
   sensor_origin_ = world_from_sensor.translation();
 
@@ -692,20 +693,29 @@ void DynamicGridFilter::cellGroundHeights(std::vector<float>& z) const
       });
 }
 
+void DynamicGridFilter::skipScan(double stamp)
+{
+  if (initialised_ && stamp > last_received_stamp_)
+  {
+    last_received_stamp_ = stamp;
+  }
+}
+
 void DynamicGridFilter::resetAfterTimeJump(double stamp, DynamicGridCycle& cycle)
 {
   if (!initialised_)
   {
     return;
   }
-  const double gap = stamp - last_stamp_;
-  if (gap < 0.0 || gap > config_.max_time_gap)
+  const double back = last_stamp_ - stamp;
+  const double gap = stamp - last_received_stamp_;
+  if (back > 0.0 || gap > config_.max_time_gap)
   {
     cycle.reset = true;
-    cycle.reset_reason = gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
-                                   : "gap of " + std::to_string(gap) +
-                                         " s since the last scan exceeds max_time_gap (" +
-                                         std::to_string(config_.max_time_gap) + " s)";
+    cycle.reset_reason = back > 0.0 ? "time jumped backwards by " + std::to_string(back) + " s"
+                                    : "gap of " + std::to_string(gap) +
+                                          " s since the last scan received exceeds max_time_gap (" +
+                                          std::to_string(config_.max_time_gap) + " s)";
     reset();
   }
 }

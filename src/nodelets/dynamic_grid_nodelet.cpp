@@ -13,10 +13,12 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "grid_vision_fusion/DynamicGrid.h"
 #include "grid_vision_fusion/DynamicGridReconfigureConfig.h"
 #include "grid_vision_fusion/ros_stages/grid_stage.h"
+#include "grid_vision_fusion/ros_sync/newest_slot.h"
 #include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 #include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
@@ -29,13 +31,20 @@ constexpr double kThrottleS = 5.0;
 
 class DynamicGridNodelet : public nodelet::Nodelet
 {
+public:
+  ~DynamicGridNodelet() override;
+
+private:
   using ReconfigureServer = dynamic_reconfigure::Server<DynamicGridReconfigureConfig>;
   using TfQueue = TfWaitQueue<sensor_msgs::PointCloud2>;
 
   void onInit() override;
   void connectCb();
-  /// A cloud whose tf (fixed_frame <- cloud frame) is available at its stamp.
+  /// A cloud whose tf (fixed_frame <- cloud frame) is available at its stamp: into the slot.
   void cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg);
+  /// The filter cycle for the newest cloud of the slot; `replaced`: the newest one dropped before it.
+  void process(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg,
+               const std::optional<sensor_msgs::PointCloud2::ConstPtr>& replaced);
   void tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg, TfWaitDrop reason);
   void subscribePoints();
   void reconfigureCb(DynamicGridReconfigureConfig& reconfigure, uint32_t level);
@@ -47,6 +56,11 @@ class DynamicGridNodelet : public nodelet::Nodelet
   std::string fixed_frame_;
   // The flow on /diagnostics (reads the stage; the callbacks below feed it: declared between).
   std::unique_ptr<StageDiagnostics> diagnostics_;
+
+  // The newest cloud with its tf, for the filter on the manager's multi-threaded queue: a cloud
+  // that comes while the filter is busy replaces a waiting one instead of queueing (overload).
+  // Ended first in the destructor; destroyed after the tf queue that feeds it.
+  std::unique_ptr<NewestSlot<sensor_msgs::PointCloud2::ConstPtr>> slot_;
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -70,7 +84,21 @@ class DynamicGridNodelet : public nodelet::Nodelet
   std::size_t resets_ = 0;
   std::size_t tf_drops_ = 0;
   std::size_t unusable_clouds_ = 0;
+  std::size_t scans_replaced_ = 0;
 };
+
+DynamicGridNodelet::~DynamicGridNodelet()
+{
+  if (diagnostics_)
+  {
+    diagnostics_->stop();
+  }
+  sub_points_.shutdown();
+  if (slot_)
+  {
+    slot_->end();  // waits for a running filter cycle; the queued ones do nothing
+  }
+}
 
 void DynamicGridNodelet::onInit()
 {
@@ -102,6 +130,10 @@ void DynamicGridNodelet::onInit()
   reconfigure_server_->setCallback(boost::bind(&DynamicGridNodelet::reconfigureCb, this,
                                                boost::placeholders::_1, boost::placeholders::_2));
 
+  slot_ = std::make_unique<NewestSlot<sensor_msgs::PointCloud2::ConstPtr>>(
+      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud,
+             const std::optional<sensor_msgs::PointCloud2::ConstPtr>& replaced)
+      { process(cloud, replaced); });
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   tf_queue_ = std::make_unique<TfQueue>(
@@ -201,8 +233,23 @@ void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& c
 
 void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg)
 {
+  if (slot_->offer(cloud_msg, getMTCallbackQueue(), reinterpret_cast<std::uint64_t>(this)))
+  {
+    diagnostics_->drop("older scan replaced by a newer one (the filter is slower than the lidar)");
+  }
+}
+
+void DynamicGridNodelet::process(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg,
+                                 const std::optional<sensor_msgs::PointCloud2::ConstPtr>& replaced)
+{
   const auto start = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(filter_mutex_);
+  if (replaced)
+  {
+    // The filter predicts over the scans it had no time for instead of resetting as after an outage.
+    ++scans_replaced_;
+    stage_->skip(**replaced);
+  }
   DynamicGridCycle cycle;
   try
   {
@@ -283,6 +330,7 @@ void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("points dropped (NaN/Inf)", invalid_points_);
   status.add("scans dropped (tf)", tf_drops_);
   status.add("scans dropped (unusable cloud)", unusable_clouds_);
+  status.add("scans dropped (replaced by a newer one: filter slower than the lidar)", scans_replaced_);
   status.add("grid resets", resets_);
   status.add("fixed frame", fixed_frame_);
 }

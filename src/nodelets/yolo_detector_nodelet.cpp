@@ -19,7 +19,7 @@
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "grid_vision_fusion/ros/detector_conversions.h"
 #include "grid_vision_fusion/ros_stages/detector_stage.h"
-#include "grid_vision_fusion/ros_sync/owned_callbacks.h"
+#include "grid_vision_fusion/ros_sync/newest_slot.h"
 #include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
 
 namespace grid_vision_fusion
@@ -47,7 +47,6 @@ private:
   void onInit() override;
   void connectCb();
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
-  void processPending();
   void process(const PendingFrame& frame);
   bool detect(const PendingFrame& frame, std::vector<Detection>& detections);
   void publishImage(const sensor_msgs::Image::ConstPtr& image_msg, const std::vector<Detection>& detections);
@@ -62,17 +61,14 @@ private:
   double score_threshold_ = 0.0;
   double nms_threshold_ = 0.0;
 
-  /// The inference callbacks on the manager's multi-threaded queue. The manager may delete a
-  /// nodelet from a worker thread after it has freed the nodelet's queues (at shutdown; ASan saw
-  /// a destructor read the freed queue), so the destructor does not touch the queue.
-  OwnedCallbacks inference_;
+  /// The newest image for the inference on the manager's multi-threaded queue: an image that
+  /// comes during an inference replaces a waiting one. The manager may delete a nodelet from a
+  /// worker thread after it has freed the nodelet's queues (at shutdown; ASan saw a destructor
+  /// read the freed queue), so the destructor only ends the slot (OwnedCallbacks).
+  std::unique_ptr<NewestSlot<PendingFrame>> slot_;
 
-  // The frame slot between the image callback and the inference on the multi-threaded queue.
-  std::mutex slot_mutex_;
-  PendingFrame pending_;
-  bool worker_scheduled_ = false;
-
-  // Counters and timing for diagnostics (slot_mutex_ guards them too).
+  // Counters and timing for diagnostics.
+  std::mutex stats_mutex_;
   std::uint64_t frames_received_ = 0;
   std::uint64_t frames_processed_ = 0;
   std::uint64_t frames_dropped_ = 0;
@@ -96,7 +92,10 @@ YoloDetectorNodelet::~YoloDetectorNodelet()
     diagnostics_->stop();
   }
   sub_image_.shutdown();
-  inference_.end();  // waits for a running inference; the queued ones do nothing
+  if (slot_)
+  {
+    slot_->end();  // waits for a running inference; the queued ones do nothing
+  }
 }
 
 void YoloDetectorNodelet::onInit()
@@ -135,6 +134,9 @@ void YoloDetectorNodelet::onInit()
       params.backend == "replay" ? "replay " + params.replay.directory : params.yolo.model_path,
       std::vector<std::pair<std::string, std::string>>{{"images", "image"}},
       [this](diagnostic_updater::DiagnosticStatusWrapper& status) { diagnose(status); });
+
+  slot_ = std::make_unique<NewestSlot<PendingFrame>>(
+      [this](const PendingFrame& frame, const std::optional<PendingFrame>& /*replaced*/) { process(frame); });
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
   reconfigure_server_->setCallback(boost::bind(&YoloDetectorNodelet::reconfigureCb, this,
@@ -198,43 +200,17 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
     return;
   }
   diagnostics_->input("images");
-  bool schedule = false;
   {
-    std::lock_guard<std::mutex> lock(slot_mutex_);
+    std::lock_guard<std::mutex> lock(stats_mutex_);
     ++frames_received_;
-    if (pending_.image)
-    {
-      ++frames_dropped_;  // inference is slower than the camera: the older frame is dropped
-      diagnostics_->drop("older image replaced by a newer one (inference slower than the camera)");
-    }
-    pending_ = {image_msg, frame_index};
-    schedule = !worker_scheduled_;
-    worker_scheduled_ = true;
   }
-  if (schedule)
+  // Inference runs on the manager's multi-threaded queue; this callback returns at once so that
+  // the newest frame always replaces a waiting one.
+  if (slot_->offer({image_msg, frame_index}, getMTCallbackQueue(), reinterpret_cast<std::uint64_t>(this)))
   {
-    // Inference runs on the manager's multi-threaded queue; this callback returns at once so
-    // that the newest frame always replaces a waiting one.
-    inference_.post(
-        getMTCallbackQueue(), [this] { processPending(); }, reinterpret_cast<std::uint64_t>(this));
-  }
-}
-
-void YoloDetectorNodelet::processPending()
-{
-  while (true)
-  {
-    PendingFrame frame;
-    {
-      std::lock_guard<std::mutex> lock(slot_mutex_);
-      if (!pending_.image)
-      {
-        worker_scheduled_ = false;
-        return;
-      }
-      std::swap(frame, pending_);
-    }
-    process(frame);
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++frames_dropped_;  // inference is slower than the camera: the older frame is dropped
+    diagnostics_->drop("older image replaced by a newer one (inference slower than the camera)");
   }
 }
 
@@ -272,7 +248,7 @@ void YoloDetectorNodelet::process(const PendingFrame& frame)
   const double elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
-    std::lock_guard<std::mutex> lock(slot_mutex_);
+    std::lock_guard<std::mutex> lock(stats_mutex_);
     if (ok)
     {
       ++frames_processed_;
@@ -317,7 +293,7 @@ void YoloDetectorNodelet::publishImage(const sensor_msgs::Image::ConstPtr& image
 
 void YoloDetectorNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
-  std::lock_guard<std::mutex> lock(slot_mutex_);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
   if (frames_failed_ > failed_reported_)
   {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::ERROR,

@@ -712,6 +712,50 @@ TEST(DynamicGridFilter, TimeJumpBackwardsAndLongGapsReset)
   EXPECT_FALSE(cycle.reset);
 }
 
+TEST(DynamicGridFilter, ScansSkippedUnderOverloadArePredictedOverInsteadOfResetting)
+{
+  // A filter slower than its lidar (overload) takes every 15th scan: 1.5 s apart, beyond
+  // max_time_gap, while the scans in between did arrive. It predicts over the 1.5 s and keeps
+  // what it knows; only a gap in the scans received (an outage) resets it.
+  DynamicGridFilter filter(testConfig());
+  DynamicGridFilter outage(testConfig());
+  BoxWorldLidar lidar;
+  const auto pose = sensorPose(0.0, 0.0, kSensorHeight);
+  Box box;
+  box.x = 15.0;
+  filter.skipScan(99.9);  // before the first scan: nothing to keep
+  for (int k = 0; k < 5; ++k)
+  {
+    EXPECT_FALSE(step(filter, lidar, pose, {box}, 100.0 + k * kPeriod).reset);
+    step(outage, lidar, pose, {box}, 100.0 + k * kPeriod);
+  }
+  const double last = 100.0 + 4 * kPeriod;
+  for (int k = 1; k < 15; ++k)
+  {
+    filter.skipScan(last + k * kPeriod);
+  }
+  DynamicGridCycle cycle = step(filter, lidar, pose, {box}, last + 15 * kPeriod);
+  EXPECT_FALSE(cycle.reset) << cycle.reset_reason;
+  EXPECT_NEAR(cycle.dt, 15 * kPeriod, 1e-9);  // the prediction spans the skipped scans
+  // Without the skipped scans the same stamp is an outage.
+  cycle = step(outage, lidar, pose, {box}, last + 15 * kPeriod);
+  EXPECT_TRUE(cycle.reset);
+  EXPECT_NE(cycle.reset_reason.find("since the last scan received"), std::string::npos) << cycle.reset_reason;
+  // The five scans before still count: the box's face is known static; after the reset it is new.
+  const std::size_t face = cellAt(filter, 13.1, 0.0);
+  EXPECT_GT(filter.cells().p_static[face], outage.cells().p_static[face] + 0.1F)
+      << filter.cells().p_static[face] << " " << outage.cells().p_static[face];
+  // A gap after the last skipped scan still counts: 1.5 s of silence resets.
+  filter.skipScan(last + 16 * kPeriod);
+  cycle = step(filter, lidar, pose, {box}, last + 31 * kPeriod);
+  EXPECT_TRUE(cycle.reset);
+  // A skipped scan stamped before the last filtered one (a bag loop) does not hide the jump back.
+  filter.skipScan(last + 32 * kPeriod);
+  cycle = step(filter, lidar, pose, {box}, 100.0);
+  EXPECT_TRUE(cycle.reset);
+  EXPECT_NE(cycle.reset_reason.find("backwards"), std::string::npos) << cycle.reset_reason;
+}
+
 TEST(DynamicGridFilter, EmptyScanIsAPredictionStep)
 {
   DynamicGridFilter filter(testConfig());

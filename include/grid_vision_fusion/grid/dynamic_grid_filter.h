@@ -28,7 +28,7 @@ struct DynamicGridConfig
   double lookahead = 15.0;  ///< grid centre this far ahead of the sensor along its heading [m]
 
   // --- time ---
-  double max_time_gap = 1.0;       ///< a larger gap between scans resets the grid [s] (>0)
+  double max_time_gap = 1.0;       ///< a larger gap between scans received resets the grid [s] (>0)
   double transition_period = 0.1;  ///< period the eps_* probabilities refer to [s] (>0)
 
   // --- transitions: probability of leaving state X for Y within transition_period ---
@@ -163,10 +163,17 @@ public:
   /// One filter cycle for the scan `cloud` (sensor frame) taken at `stamp` [s] with the
   /// sensor at `world_from_sensor` (fixed frame <- sensor): grid shift, inverse sensor model,
   /// prediction, Bayes update, persistent/newborn split, velocity statistics, birth,
-  /// resampling. An empty cloud gives a prediction step only. A stamp before the previous one
-  /// or more than max_time_gap after it resets the grid first (reported in the result).
+  /// resampling. An empty cloud gives a prediction step only. A stamp before the previous one,
+  /// or more than max_time_gap after the last scan received (filtered, or skipped: skipScan()),
+  /// resets the grid first (reported in the result).
   DynamicGridCycle update(const PointCloudView& cloud, const Eigen::Isometry3d& world_from_sensor,
                           double stamp);
+
+  /// A scan taken at `stamp` arrived but is not filtered: the stage was busy and a newer scan
+  /// replaced it (overload). The gap rule of update() then measures from this scan, so the next
+  /// update() predicts over the longer interval instead of taking the stage's own drops for a
+  /// sensor outage and resetting. Before the first update() it does nothing.
+  void skipScan(double stamp);
 
   /// Forgets everything: all cells unknown, no particle, the random streams restarted.
   void reset();
@@ -215,7 +222,7 @@ private:
   template <typename F>
   void forRowBlocks(const F& f) const;
   /// Resets the filter (and says why in `cycle`) when `stamp` lies before the last scan's or more
-  /// than max_time_gap after it.
+  /// than max_time_gap after the last scan received.
   void resetAfterTimeJump(double stamp, DynamicGridCycle& cycle);
   /// Step 1, ego motion: places the grid for the sensor pose; after the first scan, moves the
   /// cells, the scan memory and the particles by the shift (reported in `cycle`).
@@ -343,7 +350,8 @@ private:
   bool have_previous_ = false;
   std::uint64_t cycle_ = 0;  // cycles since the last reset: part of every random stream's seed
   bool initialised_ = false;
-  double last_stamp_ = 0.0;
+  double last_stamp_ = 0.0;           // the last scan filtered
+  double last_received_stamp_ = 0.0;  // the last scan received: filtered or skipped
   double ground_z_ = 0.0;
   Eigen::Vector3d sensor_origin_ = Eigen::Vector3d::Zero();  ///< of the last scan, fixed frame [m]
 };

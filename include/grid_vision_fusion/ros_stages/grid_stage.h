@@ -34,6 +34,10 @@ public:
   ///         tf2::TransformException when tf cannot answer.
   DynamicGridCycle update(const sensor_msgs::PointCloud2& cloud, const tf2::BufferCore& tf);
 
+  /// A cloud that arrived but is not filtered: a newer one replaced it while the filter was busy
+  /// (DynamicGridFilter::skipScan()).
+  void skip(const sensor_msgs::PointCloud2& cloud) { filter_.skipScan(cloud.header.stamp.toSec()); }
+
   /// The grid of the last update() as a DynamicGrid (fixed frame, the scan's stamp).
   DynamicGrid::Ptr gridMsg() const;
   /// ... as a nav_msgs/OccupancyGrid (see occupancyGridToMsg()).
