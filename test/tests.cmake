@@ -50,7 +50,7 @@ gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_
 gvf_gtest(test_ros
   SOURCES test/ros/test_fusion_conversions.cpp test/ros/test_param_source.cpp test/ros/test_node_params.cpp
     test/ros_stages/test_stages.cpp test/ros_sync/test_tf_wait_queue.cpp test/ros_sync/test_grid_for_image.cpp
-    test/ros_sync/test_stage_monitor.cpp
+    test/ros_sync/test_stage_monitor.cpp test/ros_sync/test_newest_slot.cpp
   LINK grid_vision_fusion_ros grid_vision_fusion_offline)
 gvf_gtest(test_offline
   SOURCES test/offline/test_detection_bag.cpp test/offline/test_kitti_bag_writer.cpp

@@ -33,6 +33,7 @@
 #include "grid_vision_fusion/ros_stages/projection_stage.h"
 #include "grid_vision_fusion/ros_sync/grid_for_image.h"
 #include "grid_vision_fusion/ros_sync/stage_diagnostics.h"
+#include "grid_vision_fusion/ros_sync/stamp_cadence.h"
 #include "grid_vision_fusion/ros_sync/tf_wait_queue.h"
 
 namespace grid_vision_fusion
@@ -81,6 +82,7 @@ class GridProjectionNodelet : public nodelet::Nodelet
   std::unique_ptr<TfQueue> tf_queue_;
   std::unique_ptr<TfWaitPolling> tf_polling_;  // declared after the queue it polls
   std::unique_ptr<Pairing> pairing_;
+  StampCadence grid_cadence_;  // how far apart the grids come: the age a grid may have (maxGridAge)
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   ros::Subscriber sub_grid_;
@@ -178,6 +180,7 @@ void GridProjectionNodelet::connectCb()
     sub_info_.shutdown();
     tf_queue_->clear();
     pairing_->clear();
+    grid_cadence_.clear();
   }
   else if (!sub_grid_)
   {
@@ -211,6 +214,7 @@ void GridProjectionNodelet::gridCb(const DynamicGrid::ConstPtr& grid_msg)
                           grid_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(), error.c_str());
     return;
   }
+  grid_cadence_.add(grid_msg->header.stamp);
   const DynamicGrid::ConstPtr newest = pairing_->newestGrid();
   if (newest && grid_msg->header.stamp < newest->header.stamp)
   {
@@ -271,7 +275,7 @@ void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequ
   std::size_t invalid_cells = 0;
   try
   {
-    projected = stage_->project(grid, *info_msg, *tf_buffer_, &invalid_cells);
+    projected = stage_->project(grid, *info_msg, *tf_buffer_, &invalid_cells, grid_cadence_.interval());
   }
   catch (const ProjectionSkipped& e)
   {

@@ -38,7 +38,8 @@ double ProjectionStage::groundZ(const tf2::BufferCore& tf, const std::string& gr
 }
 
 ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
-                                            const tf2::BufferCore& tf, std::size_t* invalid_cells) const
+                                            const tf2::BufferCore& tf, std::size_t* invalid_cells,
+                                            double grid_interval) const
 {
   std::unique_ptr<PinholeCamera> camera;
   try
@@ -51,11 +52,16 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
   }
   const ros::Time& image_stamp = info.header.stamp;
   const double grid_age = (image_stamp - grid.header.stamp).toSec();
-  if (std::abs(grid_age) > params_.max_grid_age)
+  const double max_age = maxGridAge(grid_interval);
+  if (std::abs(grid_age) > max_age)
   {
     throw ProjectionSkipped("the latest grid (t=" + std::to_string(grid.header.stamp.toSec()) + ") is " +
                             std::to_string(grid_age) + " s away from the image, more than max_grid_age " +
-                            std::to_string(params_.max_grid_age) + " s");
+                            std::to_string(params_.max_grid_age) + " s" +
+                            (max_age > params_.max_grid_age
+                                 ? " and " + std::to_string(kGridIntervalsOfAge) + " grid intervals (" +
+                                       std::to_string(max_age) + " s)"
+                                 : std::string()));
   }
   ProjectionGeometry geometry;
   geometry.time_offset = grid_age;

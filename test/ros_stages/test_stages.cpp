@@ -193,6 +193,20 @@ TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
   {
     EXPECT_NE(std::string(e.what()).find("max_grid_age"), std::string::npos) << e.what();
   }
+  // Grids that come 0.8 s apart (a grid stage slower than its lidar): the newest one may be three
+  // such intervals old; beyond that the stream has stalled.
+  EXPECT_DOUBLE_EQ(stage.maxGridAge(0.1), stage.params().max_grid_age);
+  EXPECT_DOUBLE_EQ(stage.maxGridAge(0.8), 2.4);
+  EXPECT_NO_THROW(stage.project(old_grid, info, tf, nullptr, 0.8));
+  try
+  {
+    stage.project(old_grid, info, tf, nullptr, 0.6);
+    FAIL() << "a grid 2 s older than the image was projected with grids 0.6 s apart";
+  }
+  catch (const ProjectionSkipped& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("grid intervals (1.8"), std::string::npos) << e.what();
+  }
   sensor_msgs::CameraInfo uncalibrated = info;
   uncalibrated.P.fill(0.0);
   EXPECT_THROW(stage.project(grid, uncalibrated, tf), ProjectionSkipped);

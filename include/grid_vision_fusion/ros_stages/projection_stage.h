@@ -6,6 +6,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <tf2/buffer_core.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,13 +32,29 @@ public:
   explicit ProjectionStage(const GridProjectionParams& params);
 
   /// The projection of `grid` into the camera of `info`: camera from CameraInfo, grid age check
-  /// (max_grid_age), camera ← grid transform and ground height from tf at the image stamp,
+  /// (maxGridAge()), camera ← grid transform and ground height from tf at the image stamp,
   /// projectGrid(), ProjectedGrid stamped like the image. `grid` must have passed
   /// checkDynamicGrid(). `invalid_cells` (when given) receives the count of cells skipped for
-  /// NaN/Inf values.
+  /// NaN/Inf values. `grid_interval`: how far apart the grids come [s] (StampCadence).
   /// @throws ProjectionSkipped with the reason (unusable camera_info, grid too old, no tf).
   ProjectedGrid::Ptr project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
-                             const tf2::BufferCore& tf, std::size_t* invalid_cells = nullptr) const;
+                             const tf2::BufferCore& tf, std::size_t* invalid_cells = nullptr,
+                             double grid_interval = 0.0) const;
+
+  /// The largest |t_image − t_grid| projected when the grids come `grid_interval` apart [s]:
+  /// max_grid_age, or kGridIntervalsOfAge intervals when the grid stage delivers its grids
+  /// further apart (a filter slower than its lidar skips scans: overload). The newest grid there
+  /// is can be that old (StampCadence); refusing it would leave the chain without output instead
+  /// of running at its capacity. A grid stream that stops is still refused once its last grid is
+  /// older than that.
+  double maxGridAge(double grid_interval) const
+  {
+    return std::max(params_.max_grid_age, kGridIntervalsOfAge * grid_interval);
+  }
+
+  /// A grid's age in grid intervals that overload may give it: one interval of processing lag,
+  /// one until the next grid, one for a cycle slower than the median (measured: doc/reliability.md).
+  static constexpr double kGridIntervalsOfAge = 3.0;
 
   /// The frames tf must know, besides the camera's, to project a grid of `grid_frame`.
   std::vector<std::string> tfFrames(const std::string& grid_frame) const;
