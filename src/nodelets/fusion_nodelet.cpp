@@ -45,6 +45,9 @@ class FusionNodelet : public nodelet::Nodelet
   void onInit() override;
   void connectCb();
   void fusionCb(const Detection2DArray::ConstPtr& detections_msg, const ProjectedGrid::ConstPtr& grid_msg);
+  /// A message the exact-time synchroniser gives up on: its partner of the same stamp never came
+  /// (the other branch dropped that frame, e.g. under overload) before newer pairs did.
+  void unpairedCb(const Detection2DArray::ConstPtr& detections_msg, const ProjectedGrid::ConstPtr& grid_msg);
   void imageCb(const sensor_msgs::Image::ConstPtr& image_msg);
   void reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t level);
   void publishOverlay(const Detection2DArray& detections_msg, const std::vector<Detection>& detections,
@@ -122,6 +125,8 @@ void FusionNodelet::onInit()
                                                                                sub_detections_, sub_grid_);
     exact_sync_->registerCallback(
         boost::bind(&FusionNodelet::fusionCb, this, boost::placeholders::_1, boost::placeholders::_2));
+    exact_sync_->registerDropCallback(
+        boost::bind(&FusionNodelet::unpairedCb, this, boost::placeholders::_1, boost::placeholders::_2));
   }
 
   it_ = std::make_unique<image_transport::ImageTransport>(nh);
@@ -215,6 +220,17 @@ void FusionNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
   while (image_cache_.size() > static_cast<std::size_t>(stage_->params().image_cache_size))
   {
     image_cache_.pop_front();
+  }
+}
+
+void FusionNodelet::unpairedCb(const Detection2DArray::ConstPtr& detections_msg,
+                               const ProjectedGrid::ConstPtr& /*grid_msg*/)
+{
+  // Only a detection without its grid loses a frame's objects; a projected grid without
+  // detections is a frame the detector did not process (its drops are counted there).
+  if (detections_msg)
+  {
+    diagnostics_->drop("detections without the projected grid of their image");
   }
 }
 
