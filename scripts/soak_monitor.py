@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""Watches a running nodelet chain for scripts/soak.sh: counts the camera images, detections and
-objects messages, measures the wall-clock latency from a frame's arrival (its camera_info, which
-the bag plays with the scan and the image of the same stamp) to its objects, samples the nodelet
-manager's resident memory, and collects every ERROR or FATAL that reaches /rosout. Writes CSV
-samples and a JSON summary when the bag has been played (the player's node leaves the graph) or on
-SIGINT.
+"""Watches a running nodelet chain for scripts/soak.sh: counts the camera frames, detections and
+objects messages, measures the wall-clock latency from a frame's arrival to its objects, samples
+the nodelet manager's resident memory, and collects every ERROR or FATAL that reaches /rosout and
+the stages' drops by reason from /diagnostics. Writes CSV samples and a JSON summary when the bag
+has been played (the player's node leaves the graph) or on SIGINT.
+
+A frame is its camera_info, which the bag plays with the scan and the image of the same stamp: the
+monitor does not subscribe to the images themselves (1.4 MB each, deserialised in Python), which
+would take CPU from the chain it measures, most of all under overload (--rate above capacity).
 """
 import argparse
 import json
@@ -15,6 +18,7 @@ import time
 
 import rosgraph
 import rospy
+from diagnostic_msgs.msg import DiagnosticArray
 from rosgraph_msgs.msg import Log
 
 
@@ -35,7 +39,6 @@ def resident_mib(pid):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--manager-pid", type=int, required=True)
-    parser.add_argument("--image", default="/kitti/camera_color_left/image_raw")
     parser.add_argument("--camera-info", default="/kitti/camera_color_left/camera_info")
     parser.add_argument("--samples", required=True, help="CSV file of the memory samples")
     parser.add_argument("--summary", required=True, help="JSON summary file")
@@ -43,8 +46,9 @@ def main():
     parser.add_argument("--player", default="/player", help="node that plays the bag")
     args = parser.parse_args(rospy.myargv()[1:])
 
-    counts = {"images": 0, "detections": 0, "objects": 0}
-    stamps = {"images": set(), "objects": set()}
+    # "images": camera frames (camera_infos); a frame's objects need its detections and its projected grid.
+    counts = {"images": 0, "detections": 0, "projected_grids": 0, "objects": 0}
+    stamps = {name: set() for name in counts}
     arrivals = {"camera_info": {}, "objects": {}}  # header stamp [ns] -> first wall arrival [s]
     errors = []
     samples = open(args.samples, "w")
@@ -67,17 +71,32 @@ def main():
             arrivals[name].setdefault(header_stamp(msg), time.time())
         return callback
 
+    drops = {}  # diagnostic status name -> {reason: inputs dropped so far}, from the latest report
+    outputs = {}  # diagnostic status name -> messages published so far
+
+    def on_diagnostics(msg):
+        for status in msg.status:
+            values = {kv.key: kv.value for kv in status.values}
+            if "outputs" in values:
+                outputs[status.name] = int(values["outputs"])
+            reasons = {key[len("dropped: "):]: int(value.split()[0])
+                       for key, value in values.items() if key.startswith("dropped: ")}
+            if reasons:
+                drops[status.name] = reasons
+
     def on_log(msg):
         if msg.level >= Log.ERROR:
             errors.append("%s: %s" % (msg.name, msg.msg))
 
     rospy.init_node("soak_monitor", disable_signals=True)
-    rospy.Subscriber(args.image, rospy.AnyMsg, counter("images"), queue_size=100)
     rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=100)
+    rospy.Subscriber("/projected_grid", rospy.AnyMsg, counter("projected_grids"), queue_size=100)
     rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=100)
     rospy.Subscriber("/objects", rospy.AnyMsg, arrival("objects"), queue_size=100)
     rospy.Subscriber(args.camera_info, rospy.AnyMsg, arrival("camera_info"), queue_size=100)
+    rospy.Subscriber(args.camera_info, rospy.AnyMsg, counter("images"), queue_size=100)
     rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000)
+    rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics, queue_size=100)
 
     stop = {"now": False}
     signal.signal(signal.SIGINT, lambda *_: stop.update(now=True))
@@ -104,7 +123,9 @@ def main():
     summary = dict(counts, errors=errors, wall_s=time.time() - start,
                    latency_median_s=percentile(0.5), latency_p99_s=percentile(0.99), latency_frames=len(latencies),
                    images_before_first_output=sum(1 for t in stamps["images"] if first is None or t < first),
-                   frames_lost=len(lost), lost_stamps_ns=lost[:100])
+                   detections_with_projected_grid=len(stamps["detections"] & stamps["projected_grids"]),
+                   frames_lost=len(lost), lost_stamps_ns=lost[:100], drops=drops,
+                   outputs=outputs)
     with open(args.summary, "w") as out:
         json.dump(summary, out, indent=1)
     samples.close()
