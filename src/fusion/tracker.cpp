@@ -197,7 +197,9 @@ std::vector<TrackPrior> Tracker::priors(double stamp_s, const std::vector<Detect
     {
       prior.cells.push_back(cell + shift);
     }
-    prior.box = filteredBox(*best, detections[d].box, stamp_s).box();
+    // A track without cells yet has filtered only boxes whose band held none: its first band with
+    // cells hangs on the detector's box (updateTrack()).
+    prior.box = best->located ? filteredBox(*best, detections[d].box, stamp_s).box() : detections[d].box;
     prior.has_box = true;
     prior.label = majorityLabel(*best);
   }
@@ -357,6 +359,7 @@ std::vector<std::size_t> Tracker::associate(const std::vector<TrackObservation>&
 
 void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
 {
+  const bool was_located = track.located;
   if (!obs.supported)
   {
     // No cell: the motion model only predicts; the cells the track expects move on with it.
@@ -374,7 +377,20 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
   {
     locate(track, obs);
   }
-  track.box_filter = filteredBox(track, obs.box, last_stamp_);
+  if (was_located)
+  {
+    track.box_filter = filteredBox(track, obs.box, last_stamp_);
+  }
+  else
+  {
+    // The box filter starts with the track's first cells. Boxes without cells before them (an
+    // object beyond the lidar's reach, a box entering at the image edge) keep the track and its
+    // association, but not its filter: their edges' rates lag where the box grows fastest (an
+    // object approached, or coming into view), the first images with cells, and a band hung on
+    // that lag misses the object's cells when its first centres set its motion model.
+    track.box_filter = BoxFilter();
+    track.box_filter.edges = edgesOf(obs.box);
+  }
   track.last_seen = last_stamp_;
   track.label_votes[obs.label] += obs.score;
   track.label_classes[obs.label] = obs.class_id;

@@ -845,6 +845,50 @@ TEST(Tracker, ATrackFiltersTheBoxItsNextDetectionIsFusedWith)
   }
 }
 
+TEST(Tracker, ABoxFilterStartsWithItsTracksFirstCells)
+{
+  // A cyclist entering at the image's right edge: its first boxes hold no cell (a sliver, standing
+  // still in the image), then the box opens up and the band finds its cells. Those first cells
+  // are fused in the detector's box, not in one the boxes without cells lag behind, and from then
+  // on the track's filter goes as a track born at its first cells would.
+  const auto cyclist = [](float x_min)
+  {
+    std::vector<Detection> detections(1);
+    detections[0].label = "cyclist";
+    detections[0].box = BoundingBox{x_min, 124.F, 1241.F, 374.F};
+    return detections;
+  };
+  const auto observation = [](const Detection& detection, bool supported)
+  {
+    TrackObservation o = observe(detection.label, 4.0, -2.0, 0.F);
+    o.box = detection.box;
+    o.supported = supported;
+    return o;
+  };
+  Tracker tracker;
+  int k = 0;
+  for (; k < 3; ++k)
+  {
+    tracker.update(k * kFramePeriodS, {observation(cyclist(1190.F)[0], false)});
+  }
+  const std::vector<Detection> first = cyclist(1075.F);
+  const TrackPrior prior = tracker.priors(k * kFramePeriodS, first)[0];
+  EXPECT_TRUE(prior.has_box);
+  EXPECT_EQ(prior.label, "cyclist");
+  EXPECT_FLOAT_EQ(prior.box.x_min, 1075.F) << "the detector's box, not the filter's lag behind it";
+  const TrackEstimate located = tracker.update(k * kFramePeriodS, {observation(first[0], true)})[0];
+  EXPECT_EQ(located.id, 1U) << "the boxes without cells kept the track";
+
+  Tracker born;  // a track born at the first cells
+  born.update(k * kFramePeriodS, {observation(first[0], true)});
+  ++k;
+  const std::vector<Detection> second = cyclist(998.F);
+  const TrackPrior kept = tracker.priors(k * kFramePeriodS, second)[0];
+  const TrackPrior fresh = born.priors(k * kFramePeriodS, second)[0];
+  EXPECT_FLOAT_EQ(kept.box.x_min, fresh.box.x_min);
+  EXPECT_FLOAT_EQ(kept.box.x_max, fresh.box.x_max);
+}
+
 TEST(Tracker, OverlappingBoxesPassTheGateWhenThePositionJumps)
 {
   // The position jumps by 5 m (a partly hidden object's estimate), far outside the gate, but
