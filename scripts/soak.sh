@@ -76,7 +76,7 @@ port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.
 export ROS_MASTER_URI=http://localhost:$port
 echo "[soak] kitti_replay.launch at rate $rate (roslaunch on port $port, log in $out/replay.log)"
 roslaunch -p "$port" grid_vision_fusion kitti_replay.launch bag:="$bag" rate:="$rate" \
-  replay_directory:="$drive/label_2" start_delay:=10 "${detector[@]}" >"$out/replay.log" 2>&1 &
+  replay_directory:="$drive/label_2" start_delay:=10 player_required:=false "${detector[@]}" >"$out/replay.log" 2>&1 &
 launch=$!
 manager=""
 for _ in $(seq 60); do  # the manager's process, once roslaunch has started it
@@ -85,8 +85,11 @@ for _ in $(seq 60); do  # the manager's process, once roslaunch has started it
   sleep 0.5
 done
 [[ -n "$manager" ]] || { kill "$launch"; echo "soak: the nodelet manager did not start: see $out/replay.log" >&2; exit 1; }
+# The chain stays up after the bag (player_required:=false) until the monitor has its last
+# messages and diagnostics, then the launch is ended.
 python3 "$root/scripts/soak_monitor.py" --manager-pid "$manager" --samples "$out/memory.csv" \
   --summary "$out/monitor.json"
+kill -INT "$launch" 2>/dev/null || true
 wait "$launch" || true
 [[ "$keep" == true ]] || rm -rf "$out/drive.bag" "$out/kitti"
 

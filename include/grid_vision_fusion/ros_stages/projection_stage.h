@@ -52,8 +52,10 @@ public:
     return std::max(params_.max_grid_age, kGridIntervalsOfAge * grid_interval);
   }
 
-  /// A grid's age in grid intervals that overload may give it: one interval of processing lag,
-  /// one until the next grid, one for a cycle slower than the median (measured: doc/reliability.md).
+  /// A grid's age in grid intervals that overload may give it: the newest grid is as old as the
+  /// interval before it (the cycle that made it) and the one that has not ended yet (the cycle
+  /// under way, which may be the longest so far): two, and one more for that one's length
+  /// (doc/reliability.md, "Overload").
   static constexpr double kGridIntervalsOfAge = 3.0;
 
   /// The frames tf must know, besides the camera's, to project a grid of `grid_frame`.

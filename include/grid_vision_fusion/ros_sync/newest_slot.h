@@ -33,7 +33,7 @@ public:
 
   /// Puts `input` in the slot and schedules the work on `queue` (under `owner_id`) unless it is
   /// already scheduled. Returns true when `input` replaced an input the work had not taken yet
-  /// (that one is dropped). Returns at once.
+  /// (that one is dropped). Returns at once. Every call must name the same queue and owner.
   bool offer(Input input, ros::CallbackQueueInterface& queue, std::uint64_t owner_id)
   {
     bool replaced = false;
@@ -48,11 +48,12 @@ public:
       pending_ = std::move(input);
       schedule = !scheduled_;
       scheduled_ = true;
+      queue_ = &queue;
+      owner_id_ = owner_id;
     }
     if (schedule)
     {
-      callbacks_.post(
-          queue, [this] { drain(); }, owner_id);
+      post();
     }
     return replaced;
   }
@@ -61,23 +62,38 @@ public:
   void end() { callbacks_.end(); }
 
 private:
-  void drain()
+  void post()
   {
-    while (true)
+    callbacks_.post(
+        *queue_, [this] { workOnce(); }, owner_id_);
+  }
+
+  /// One input per callback: an input that came meanwhile is worked on in a callback posted anew,
+  /// behind what the queue's threads have waiting. A loop here would keep a thread of the nodelet
+  /// manager for as long as the inputs come faster than the work (overload), and the other
+  /// nodelets' callbacks queued on that thread would wait for all of it.
+  void workOnce()
+  {
+    std::optional<Input> newest;
+    std::optional<Input> replaced;
     {
-      std::optional<Input> newest;
-      std::optional<Input> replaced;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (!pending_)
-        {
-          scheduled_ = false;
-          return;
-        }
-        newest.swap(pending_);
-        replaced.swap(replaced_);
-      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      newest.swap(pending_);
+      replaced.swap(replaced_);
+    }
+    if (newest)
+    {
       work_(*newest, replaced);
+    }
+    bool again = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      again = pending_.has_value();
+      scheduled_ = again;
+    }
+    if (again)
+    {
+      post();
     }
   }
 
@@ -86,6 +102,8 @@ private:
   std::optional<Input> pending_;
   std::optional<Input> replaced_;
   bool scheduled_ = false;
+  ros::CallbackQueueInterface* queue_ = nullptr;
+  std::uint64_t owner_id_ = 0;
   OwnedCallbacks callbacks_;  // declared last: destroyed (ended) first
 };
 

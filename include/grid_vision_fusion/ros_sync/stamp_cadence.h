@@ -10,15 +10,16 @@
 
 namespace grid_vision_fusion
 {
-/// How far apart a stream's messages come, by their stamps: the median of the last kIntervals
-/// intervals, so that one long gap (an outage, a bag paused) does not set it. When the stream
-/// stops it keeps its value from before, so that the silence itself can be told from it. A stamp
-/// before the previous one (time went backwards: a bag loop) starts over. Thread-safe.
+/// How far apart a stream's messages come, by their stamps: the second longest of the last
+/// kIntervals intervals. It covers the spread of a stream that comes irregularly (a stage slower
+/// than its input delivers in bursts and pauses) and ignores one long gap (an outage, a bag
+/// paused); when the stream stops it keeps its value from before, so that the silence itself can
+/// be told from it. A stamp before the previous one (time went backwards: a bag loop) starts over.
+/// Thread-safe.
 ///
 /// The grid_projection nodelet reads it for the grids: a grid stage slower than its lidar
-/// (overload) delivers grids further apart in sensor time than the scans come, and the newest grid
-/// there is at an image's time is then one to two such intervals old, more while one cycle takes
-/// longer than the others.
+/// (overload) delivers grids further apart in sensor time than the scans come, and the newest
+/// grid there is at an image's time is then up to about two such intervals old.
 class StampCadence
 {
 public:
@@ -41,19 +42,19 @@ public:
     has_last_ = true;
   }
 
-  /// The median of the last intervals [s]; 0 before two stamps.
+  /// The second longest of the last intervals (the only one while there is one) [s]; 0 before two
+  /// stamps.
   double interval() const
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (filled_ == 0)
+    double longest = 0.0;
+    double second = 0.0;
+    for (std::size_t i = 0; i < filled_; ++i)
     {
-      return 0.0;
+      second = std::max(second, std::min(longest, intervals_[i]));
+      longest = std::max(longest, intervals_[i]);
     }
-    std::array<double, kIntervals> held = intervals_;
-    const auto end = held.begin() + static_cast<std::ptrdiff_t>(filled_);
-    const auto middle = held.begin() + static_cast<std::ptrdiff_t>(filled_ / 2);
-    std::nth_element(held.begin(), middle, end);
-    return *middle;
+    return filled_ == 1 ? longest : second;
   }
 
   void clear()
