@@ -84,7 +84,6 @@ private:
   std::size_t resets_ = 0;
   std::size_t tf_drops_ = 0;
   std::size_t unusable_clouds_ = 0;
-  std::size_t scans_replaced_ = 0;
 };
 
 DynamicGridNodelet::~DynamicGridNodelet()
@@ -247,7 +246,6 @@ void DynamicGridNodelet::process(const sensor_msgs::PointCloud2::ConstPtr& cloud
   if (replaced)
   {
     // The filter predicts over the scans it had no time for instead of resetting as after an outage.
-    ++scans_replaced_;
     stage_->skip(**replaced);
   }
   DynamicGridCycle cycle;
@@ -330,7 +328,6 @@ void DynamicGridNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("points dropped (NaN/Inf)", invalid_points_);
   status.add("scans dropped (tf)", tf_drops_);
   status.add("scans dropped (unusable cloud)", unusable_clouds_);
-  status.add("scans dropped (replaced by a newer one: filter slower than the lidar)", scans_replaced_);
   status.add("grid resets", resets_);
   status.add("fixed frame", fixed_frame_);
 }

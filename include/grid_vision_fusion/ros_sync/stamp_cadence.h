@@ -19,7 +19,8 @@ namespace grid_vision_fusion
 ///
 /// The grid_projection nodelet reads it for the grids: a grid stage slower than its lidar
 /// (overload) delivers grids further apart in sensor time than the scans come, and the newest
-/// grid there is at an image's time is then up to about two such intervals old.
+/// grid there is at an image's time is then about two such intervals old, more during a slow
+/// cycle (ProjectionStage::maxGridAge()).
 class StampCadence
 {
 public:
