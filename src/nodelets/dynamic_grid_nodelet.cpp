@@ -93,6 +93,7 @@ DynamicGridNodelet::~DynamicGridNodelet()
     diagnostics_->stop();
   }
   sub_points_.shutdown();
+  tf_polling_.reset();  // nothing hands the slot a cloud any more
   if (slot_)
   {
     slot_->end();  // waits for a running filter cycle; the queued ones do nothing
