@@ -58,8 +58,7 @@ def main():
     def counter(name):
         def callback(msg):
             counts[name] += 1
-            if name in stamps:
-                stamps[name].add(header_stamp(msg))
+            stamps[name].add(header_stamp(msg))
             if name == "objects" and counts["objects"] % args.every == 0:
                 samples.write("%d,%.1f,%.2f\n" % (counts["objects"], time.time() - start,
                                                   resident_mib(args.manager_pid)))
