@@ -429,7 +429,14 @@ void Tracker::locate(Track& track, const TrackObservation& obs) const
 {
   track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
   track.motion.updateGrid(obs.grid);
-  track.recent_hits = hitsBefore(obs, track.motion);
+  // A new object's hits are in the scans before its first image, if the lidar saw it: its first
+  // hits register against them. A track whose boxes came without cells first was in the camera's
+  // view but not in the lidar's (hidden from it by an occluder, or beyond its reach): the scans
+  // of those images hold what stood around its place, not its hits, and a neighbour of its shape
+  // there (the next parked car) would register as its displacement. It registers against its own
+  // hits only.
+  const bool seen_without_cells = last_stamp_ > track.first_stamp;
+  track.recent_hits = seen_without_cells ? std::deque<ObservedHits>() : hitsBefore(obs, track.motion);
   registerHits(track, obs);
   track.cells = obs.cells;
   track.located = true;

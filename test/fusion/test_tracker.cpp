@@ -683,6 +683,51 @@ TEST(Tracker, ANewTrackRegistersItsFirstHitsAgainstTheScansBefore)
   EXPECT_LT(first_image(0.0, true), 0.2);
 }
 
+TEST(Tracker, ATrackSeenWithoutCellsFirstDoesNotRegisterAgainstTheScansBefore)
+{
+  // A parked car the camera sees for three images while the lidar does not (an occluder hides it
+  // from the lidar): its boxes come without cells. The scans of those images hold the hits of the
+  // next parked car, of the same shape, 2 m to its right, and none of its own. Its first hits,
+  // registered against them, would say that this car came from there. It registers against its
+  // own hits only: standing, as the grid says. A car first seen with its cells still registers
+  // against the scans before (previous test).
+  auto first_images = [](bool boxes_without_cells)
+  {
+    Tracker tracker;
+    double p_max = 0.0;
+    for (int k = 0; k <= 5; ++k)
+    {
+      std::vector<Eigen::Vector2d> scene;
+      for (const Eigen::Vector2d& hit : carHits(10.1))  // the next car, standing
+      {
+        scene.emplace_back(hit.x(), hit.y() - 2.0);
+      }
+      TrackObservation o = observe("car", 11.1, 2.9, 600.F);
+      o.cell_size = 0.2;
+      o.supported = k >= 3;
+      if (o.supported)
+      {
+        o.hits = carHits(10.1);
+        scene.insert(scene.end(), o.hits.begin(), o.hits.end());
+      }
+      std::vector<TrackObservation> observations;
+      if (o.supported || boxes_without_cells)
+      {
+        observations.push_back(o);
+      }
+      const auto estimates = tracker.update(k * kFramePeriodS, observations, scene);
+      if (o.supported)
+      {
+        p_max = std::max(p_max, estimates.at(0).p_dynamic);
+      }
+    }
+    return p_max;
+  };
+  EXPECT_LT(first_images(true), 0.5);
+  EXPECT_GT(first_images(false), 0.5) << "first seen with its cells: the scans before saw its place empty, "
+                                         "and the next car's hits register as where it came from";
+}
+
 TEST(Tracker, TrackObjectsKeepsTheScenesHitsForNewTracks)
 {
   // The grid's cells that the lidar hit in each image, objects or not, are the scans a new track

@@ -216,9 +216,9 @@ private:
     int hits = 0;
     int misses = 0;
     bool confirmed = false;
-    double first_stamp = 0.0;
-    bool located = false;  ///< its motion model has started: it has had an observation with cells
-    int centres = 0;       ///< observations with cells since it was located
+    double first_stamp = 0.0;  ///< stamp of its first image [s]
+    bool located = false;      ///< its motion model has started: it has had an observation with cells
+    int centres = 0;           ///< observations with cells since it was located
   };
 
   /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
