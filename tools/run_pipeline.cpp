@@ -267,11 +267,23 @@ int run(const Options& o)
   std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, "
             << s.images << " images, " << s.camera_infos << " camera_infos -> " << s.grids << " grids, "
             << s.projections << " projected grids, " << s.objects << " object arrays on /objects\n";
-  if (s.grid_drops + s.detector_drops + s.projection_drops + s.fusion_drops + s.grid_resets > 0)
+  const std::size_t drops =
+      s.grid_drops + s.detector_drops + s.projection_drops + s.fusion_drops + s.grid_resets;
+  if (drops > 0)
   {
     std::cerr << "run_pipeline: dropped: " << s.grid_drops << " scans, " << s.detector_drops << " images, "
               << s.projection_drops << " camera_infos, " << s.fusion_drops << " fusion inputs; "
-              << s.grid_resets << " grid resets. Reasons:\n";
+              << s.grid_resets << " grid resets.\n";
+  }
+  if (s.projections_without_cells > 0)
+  {
+    std::cerr << "run_pipeline: " << s.projections_without_cells
+              << " projected grids without cells (the grid too old for the image): their detections came out "
+                 "placed by their boxes or tracks, motion unknown.\n";
+  }
+  if (drops + s.projections_without_cells > 0)
+  {
+    std::cerr << "run_pipeline: reasons:\n";
     for (const std::string& w : s.warnings)
     {
       std::cerr << "  " << w << "\n";

@@ -272,10 +272,10 @@ void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequ
   const DynamicGrid& grid = *request->grid;
   const sensor_msgs::CameraInfo::ConstPtr& info_msg = request->info;
   ProjectedGrid::Ptr projected;
-  std::size_t invalid_cells = 0;
+  ProjectionNotes notes;
   try
   {
-    projected = stage_->project(grid, *info_msg, *tf_buffer_, &invalid_cells, grid_cadence_.interval());
+    projected = stage_->project(grid, *info_msg, *tf_buffer_, &notes, grid_cadence_.interval());
   }
   catch (const ProjectionSkipped& e)
   {
@@ -287,12 +287,22 @@ void GridProjectionNodelet::project(const boost::shared_ptr<const ProjectionRequ
                           sub_grid_.getTopic().c_str(), e.what());
     return;
   }
-  if (invalid_cells > 0)
+  if (notes.invalid_cells > 0)
   {
     NODELET_WARN_THROTTLE(kThrottleS,
                           "grid_projection: %zu cells of the grid on %s skipped (NaN/Inf probability or "
                           "velocity)",
-                          invalid_cells, sub_grid_.getTopic().c_str());
+                          notes.invalid_cells, sub_grid_.getTopic().c_str());
+  }
+  if (!notes.cells_left_out.empty())
+  {
+    diagnostics_->drop("cells left out: grid too old", notes.cells_left_out);
+    NODELET_WARN_THROTTLE(
+        kThrottleS,
+        "grid_projection: camera_info of %s at t=%.3f with the grid of %s: %s; published "
+        "without cells (its detections come out placed by their tracks or boxes, motion unknown)",
+        sub_info_.getTopic().c_str(), info_msg->header.stamp.toSec(), sub_grid_.getTopic().c_str(),
+        notes.cells_left_out.c_str());
   }
   if (pub_image_.getNumSubscribers() > 0)
   {

@@ -333,15 +333,21 @@ void Pipeline::processCameraInfo(const sensor_msgs::CameraInfo& msg)
     return;
   }
   ProjectedGrid::ConstPtr projected;
+  ProjectionNotes notes;
   try
   {
-    projected = projection_->project(*latest_grid_, msg, tf_);
+    projected = projection_->project(*latest_grid_, msg, tf_, &notes);
   }
   catch (const ProjectionSkipped& e)
   {
     ++stats_.projection_drops;
     warn(std::string("grid_projection: nothing projected: ") + e.what());
     return;
+  }
+  if (!notes.cells_left_out.empty())
+  {
+    ++stats_.projections_without_cells;
+    warn("grid_projection: projected without cells: " + notes.cells_left_out);
   }
   ++stats_.projections;
   stats_.projection_ms.push_back(elapsedMs(start));

@@ -38,7 +38,7 @@ double ProjectionStage::groundZ(const tf2::BufferCore& tf, const std::string& gr
 }
 
 ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
-                                            const tf2::BufferCore& tf, std::size_t* invalid_cells,
+                                            const tf2::BufferCore& tf, ProjectionNotes* notes,
                                             double grid_interval) const
 {
   std::unique_ptr<PinholeCamera> camera;
@@ -50,18 +50,21 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
   {
     throw ProjectionSkipped("unusable camera_info (frame '" + info.header.frame_id + "'): " + e.what());
   }
+  ProjectionNotes local_notes;
+  ProjectionNotes& said = notes ? *notes : local_notes;
+  said = ProjectionNotes();
   const ros::Time& image_stamp = info.header.stamp;
   const double grid_age = (image_stamp - grid.header.stamp).toSec();
   const double max_age = maxGridAge(grid_interval);
   if (std::abs(grid_age) > max_age)
   {
-    throw ProjectionSkipped("the latest grid (t=" + std::to_string(grid.header.stamp.toSec()) + ") is " +
-                            std::to_string(grid_age) + " s away from the image, more than max_grid_age " +
-                            std::to_string(params_.max_grid_age) + " s" +
-                            (max_age > params_.max_grid_age
-                                 ? " and " + std::to_string(kGridIntervalsOfAge) + " grid intervals (" +
-                                       std::to_string(max_age) + " s)"
-                                 : std::string()));
+    said.cells_left_out =
+        "the latest grid (t=" + std::to_string(grid.header.stamp.toSec()) + ") is " +
+        std::to_string(grid_age) + " s away from the image, more than max_grid_age " +
+        std::to_string(params_.max_grid_age) + " s" +
+        (max_age > params_.max_grid_age ? " and " + std::to_string(kGridIntervalsOfAge) +
+                                              " grid intervals (" + std::to_string(max_age) + " s)"
+                                        : std::string());
   }
   ProjectionGeometry geometry;
   geometry.time_offset = grid_age;
@@ -85,17 +88,17 @@ ProjectedGrid::Ptr ProjectionStage::project(const DynamicGrid& grid, const senso
                             " (ground_frame): " + e.what());
   }
   ProjectedCells cells;
-  try
+  if (said.cells_left_out.empty())
   {
-    cells = projectGrid(gridCellsViewOf(grid), *camera, geometry, params_.projection);
-  }
-  catch (const std::invalid_argument& e)
-  {
-    throw ProjectionSkipped(std::string("cannot project the grid: ") + e.what());
-  }
-  if (invalid_cells)
-  {
-    *invalid_cells = cells.cells_invalid;
+    try
+    {
+      cells = projectGrid(gridCellsViewOf(grid), *camera, geometry, params_.projection);
+    }
+    catch (const std::invalid_argument& e)
+    {
+      throw ProjectionSkipped(std::string("cannot project the grid: ") + e.what());
+    }
+    said.invalid_cells = cells.cells_invalid;
   }
   ProjectedGrid::Ptr msg = projectedGridToMsg(std::move(cells), info.header, grid.header, *camera);
   const Eigen::Vector3d camera_position = geometry.camera_from_grid.inverse().translation();

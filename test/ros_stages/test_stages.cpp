@@ -182,31 +182,28 @@ TEST(ProjectionStage, SkipsWithTheReasonAndProjectsOnceTfIsThere)
   EXPECT_NEAR(foot.x(), 10.0, 1e-6);
   EXPECT_NEAR(foot.y(), 2.0, 1e-6);
 
+  // A grid 2 s older than the image says too little of its scene: no cell of it is projected, the
+  // geometry is (the fusion places the image's boxes with it), and the notes say why.
   DynamicGrid old_grid = grid;
   old_grid.header.stamp = kStamp - ros::Duration(2.0);
-  try
-  {
-    stage.project(old_grid, info, tf);
-    FAIL() << "a grid 2 s older than the image was projected";
-  }
-  catch (const ProjectionSkipped& e)
-  {
-    EXPECT_NE(std::string(e.what()).find("max_grid_age"), std::string::npos) << e.what();
-  }
+  ProjectionNotes notes;
+  const ProjectedGrid::Ptr without_cells = stage.project(old_grid, info, tf, &notes);
+  EXPECT_TRUE(without_cells->u.empty()) << "cells of a grid 2 s older than the image were projected";
+  EXPECT_TRUE(without_cells->x.empty() && without_cells->state.empty());
+  EXPECT_NE(notes.cells_left_out.find("max_grid_age"), std::string::npos) << notes.cells_left_out;
+  EXPECT_EQ(without_cells->header.stamp, kStamp);
+  EXPECT_EQ(without_cells->grid_stamp, old_grid.header.stamp) << "the planner sees how old the grid was";
+  EXPECT_EQ(without_cells->grid_to_image, projected->grid_to_image);
+  EXPECT_TRUE(imageGroundOf(*without_cells).valid());
   // Grids that come 0.8 s apart (a grid stage slower than its lidar): the newest one may be three
   // such intervals old; beyond that the stream has stalled.
   EXPECT_DOUBLE_EQ(stage.maxGridAge(0.1), stage.params().max_grid_age);
   EXPECT_DOUBLE_EQ(stage.maxGridAge(0.8), 2.4);
-  EXPECT_NO_THROW(stage.project(old_grid, info, tf, nullptr, 0.8));
-  try
-  {
-    stage.project(old_grid, info, tf, nullptr, 0.6);
-    FAIL() << "a grid 2 s older than the image was projected with grids 0.6 s apart";
-  }
-  catch (const ProjectionSkipped& e)
-  {
-    EXPECT_NE(std::string(e.what()).find("grid intervals (1.8"), std::string::npos) << e.what();
-  }
+  EXPECT_EQ(stage.project(old_grid, info, tf, &notes, 0.8)->u.size(), projected->u.size());
+  EXPECT_TRUE(notes.cells_left_out.empty()) << notes.cells_left_out;
+  EXPECT_TRUE(stage.project(old_grid, info, tf, &notes, 0.6)->u.empty())
+      << "cells of a grid 2 s older than the image were projected with grids 0.6 s apart";
+  EXPECT_NE(notes.cells_left_out.find("grid intervals (1.8"), std::string::npos) << notes.cells_left_out;
   sensor_msgs::CameraInfo uncalibrated = info;
   uncalibrated.P.fill(0.0);
   EXPECT_THROW(stage.project(grid, uncalibrated, tf), ProjectionSkipped);
@@ -336,6 +333,25 @@ TEST(FusionStage, FusesAPairAndRefusesAnInvalidConfiguration)
   }
   EXPECT_GE(id, 1U);
   EXPECT_EQ(tracked.tracker().size(), 1U);
+
+  // A projected grid without cells (the grid too old for the image) still gives the image's
+  // object: its track's, placed by the track, motion unknown. The camera at 1.5 m looks along +x.
+  ProjectedGrid without_cells;
+  without_cells.header = grid.header;
+  without_cells.header.stamp += ros::Duration(0.1);
+  without_cells.grid_stamp = grid.header.stamp - ros::Duration(2.0);
+  without_cells.grid_frame_id = grid.grid_frame_id;
+  without_cells.image_width = grid.image_width;
+  without_cells.image_height = grid.image_height;
+  without_cells.grid_to_image = {320.0, -500.0, 0.0, 0.0, 240.0, 0.0, -500.0, 750.0, 1.0, 0.0, 0.0, 0.0};
+  detections.header.stamp = without_cells.header.stamp;
+  const FusedPair unsupported = tracked.fuse(detections, without_cells);
+  ASSERT_EQ(unsupported.objects->objects.size(), 1U);
+  const DetectedObject& object = unsupported.objects->objects[0];
+  EXPECT_EQ(object.id, id);
+  EXPECT_EQ(object.position_source, DetectedObject::POSITION_FROM_TRACK);
+  EXPECT_EQ(object.motion, DetectedObject::MOTION_UNKNOWN);
+  EXPECT_GT(object.position.x, 12.4);
 }
 
 }  // namespace

@@ -66,10 +66,11 @@ struct PipelineStats
   std::vector<double> fusion_ms;      ///< per fused pair
   std::size_t clouds = 0, images = 0, camera_infos = 0;
   std::size_t grids = 0, detections = 0, projections = 0, objects = 0;
-  std::size_t grid_drops = 0;        ///< clouds without tf / with unusable fields
-  std::size_t detector_drops = 0;    ///< images that could not be processed
-  std::size_t projection_drops = 0;  ///< camera_infos without grid / tf / usable camera
-  std::size_t fusion_drops = 0;      ///< pairs refused, or an output without partner
+  std::size_t grid_drops = 0;                 ///< clouds without tf / with unusable fields
+  std::size_t detector_drops = 0;             ///< images that could not be processed
+  std::size_t projection_drops = 0;           ///< camera_infos without grid / tf / usable camera
+  std::size_t projections_without_cells = 0;  ///< of `projections`: the grid too old for the image
+  std::size_t fusion_drops = 0;               ///< pairs refused, or an output without partner
   std::size_t grid_resets = 0;
   std::vector<std::string> warnings;  ///< the first few distinct reasons of drops (for the user)
 };

@@ -24,6 +24,16 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+/// What ProjectionStage::project() tells besides its message.
+struct ProjectionNotes
+{
+  /// Cells skipped for NaN/Inf values.
+  std::size_t invalid_cells = 0;
+  /// Why the message holds no cell although the grid has some: the grid is too old for the image
+  /// (maxGridAge()). Empty when the grid was projected.
+  std::string cells_left_out;
+};
+
 /// The projection with its parameters. Stateless between calls; project() may run concurrently.
 class ProjectionStage
 {
@@ -31,22 +41,24 @@ public:
   /// @throws std::invalid_argument when `params` is invalid.
   explicit ProjectionStage(const GridProjectionParams& params);
 
-  /// The projection of `grid` into the camera of `info`: camera from CameraInfo, grid age check
-  /// (maxGridAge()), camera ← grid transform and ground height from tf at the image stamp,
-  /// projectGrid(), ProjectedGrid stamped like the image. `grid` must have passed
-  /// checkDynamicGrid(). `invalid_cells` (when given) receives the count of cells skipped for
-  /// NaN/Inf values. `grid_interval`: how far apart the grids come [s] (StampCadence).
-  /// @throws ProjectionSkipped with the reason (unusable camera_info, grid too old, no tf).
+  /// The projection of `grid` into the camera of `info`: camera from CameraInfo, camera ← grid
+  /// transform and ground height from tf at the image stamp, projectGrid(), ProjectedGrid stamped
+  /// like the image. A grid older than maxGridAge() says too little of the image's scene: the
+  /// message then holds no cell, only the geometry (camera position, grid_to_image, ground_z), so
+  /// that the fusion still publishes the image's detections, placed by their boxes or tracks
+  /// (motion unknown), and `notes->cells_left_out` says why. `grid` must have passed
+  /// checkDynamicGrid(). `notes` (when given) receives what else there is to tell.
+  /// `grid_interval`: how far apart the grids come [s] (StampCadence).
+  /// @throws ProjectionSkipped with the reason (unusable camera_info, no tf).
   ProjectedGrid::Ptr project(const DynamicGrid& grid, const sensor_msgs::CameraInfo& info,
-                             const tf2::BufferCore& tf, std::size_t* invalid_cells = nullptr,
+                             const tf2::BufferCore& tf, ProjectionNotes* notes = nullptr,
                              double grid_interval = 0.0) const;
 
-  /// The largest |t_image − t_grid| projected when the grids come `grid_interval` apart [s]:
-  /// max_grid_age, or kGridIntervalsOfAge intervals when the grid stage delivers its grids
-  /// further apart (a filter slower than its lidar skips scans: overload). The newest grid there
-  /// is can be that old (StampCadence); refusing it would leave the chain without output instead
-  /// of running at its capacity. A grid stream that stops is still refused once its last grid is
-  /// older than that.
+  /// The largest |t_image − t_grid| whose cells are projected when the grids come `grid_interval`
+  /// apart [s]: max_grid_age, or kGridIntervalsOfAge intervals when the grid stage delivers its
+  /// grids further apart (a filter slower than its lidar skips scans: overload). The newest grid
+  /// there is can be that old (StampCadence). The cells of a grid stream that stops are left out
+  /// once its last grid is older than that.
   double maxGridAge(double grid_interval) const
   {
     return std::max(params_.max_grid_age, kGridIntervalsOfAge * grid_interval);
