@@ -108,6 +108,10 @@ print("[soak] images %d, detections %d, projected grids %d (%d of them for a det
       "%d frames lost after the first output (%d images before it)"
       % (monitor["images"], monitor["detections"], monitor["projected_grids"],
          monitor["detections_with_projected_grid"], monitor["objects"], lost, monitor["images_before_first_output"]))
+if monitor["projected_grids_without_cells"]:
+    print("[soak] %d projected grids without cells (the grid too old for the image), %d object arrays from them "
+          "(boxes placed by their tracks or the ground, motion unknown)"
+          % (monitor["projected_grids_without_cells"], monitor["objects_without_cells"]))
 if monitor["latency_frames"]:
     print("[soak] wall-clock latency from a frame's arrival to its objects: median %.3f s, p99 %.3f s (%d frames)"
           % (monitor["latency_median_s"], monitor["latency_p99_s"], monitor["latency_frames"]))

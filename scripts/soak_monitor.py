@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Watches a running nodelet chain for scripts/soak.sh: counts the camera frames, detections and
-objects messages, measures the wall-clock latency from a frame's arrival to its objects, samples
+objects messages (and the projected grids without cells: the grid too old for the image), measures the wall-clock latency from a frame's arrival to its objects, samples
 the nodelet manager's resident memory, and collects every ERROR or FATAL that reaches /rosout and
 the stages' drops by reason from /diagnostics. Writes CSV samples and a JSON summary when the bag
 has been played (the player's node leaves the graph) or on SIGINT.
@@ -26,6 +26,20 @@ def header_stamp(msg):
     """The header stamp of a serialized message that starts with a std_msgs/Header."""
     _seq, secs, nsecs = struct.unpack_from("<III", msg._buff, 0)
     return secs * 1000000000 + nsecs
+
+
+def projected_cells(msg):
+    """The number of cells of a serialized ProjectedGrid (the length of its u array)."""
+    buff = msg._buff
+
+    def skip_string(offset):
+        (length,) = struct.unpack_from("<I", buff, offset)
+        return offset + 4 + length
+
+    offset = skip_string(12)  # header: seq, stamp, frame_id
+    offset = skip_string(offset + 8)  # grid_stamp, grid_frame_id
+    offset += 4 + 4 + 4 + 3 * 8 + 12 * 8 + 4  # image size, resolution, camera_position, grid_to_image, ground_z
+    return struct.unpack_from("<I", buff, offset)[0]
 
 
 def resident_mib(pid):
@@ -55,10 +69,14 @@ def main():
     samples.write("objects_messages,wall_s,manager_rss_mib\n")
     start = time.time()
 
+    without_cells = set()  # stamps of the projected grids without cells (the grid too old for the image)
+
     def counter(name):
         def callback(msg):
             counts[name] += 1
             stamps[name].add(header_stamp(msg))
+            if name == "projected_grids" and projected_cells(msg) == 0:
+                without_cells.add(header_stamp(msg))
             if name == "objects" and counts["objects"] % args.every == 0:
                 samples.write("%d,%.1f,%.2f\n" % (counts["objects"], time.time() - start,
                                                   resident_mib(args.manager_pid)))
@@ -88,12 +106,12 @@ def main():
             errors.append("%s: %s" % (msg.name, msg.msg))
 
     rospy.init_node("soak_monitor", disable_signals=True)
-    rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=100)
-    rospy.Subscriber("/projected_grid", rospy.AnyMsg, counter("projected_grids"), queue_size=100)
-    rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=100)
-    rospy.Subscriber("/objects", rospy.AnyMsg, arrival("objects"), queue_size=100)
-    rospy.Subscriber(args.camera_info, rospy.AnyMsg, arrival("camera_info"), queue_size=100)
-    rospy.Subscriber(args.camera_info, rospy.AnyMsg, counter("images"), queue_size=100)
+    rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=None)
+    rospy.Subscriber("/projected_grid", rospy.AnyMsg, counter("projected_grids"), queue_size=None)
+    rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=None)
+    rospy.Subscriber("/objects", rospy.AnyMsg, arrival("objects"), queue_size=None)
+    rospy.Subscriber(args.camera_info, rospy.AnyMsg, arrival("camera_info"), queue_size=None)
+    rospy.Subscriber(args.camera_info, rospy.AnyMsg, counter("images"), queue_size=None)
     rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000)
     rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics, queue_size=100)
 
@@ -123,6 +141,8 @@ def main():
                    latency_median_s=percentile(0.5), latency_p99_s=percentile(0.99), latency_frames=len(latencies),
                    images_before_first_output=sum(1 for t in stamps["images"] if first is None or t < first),
                    detections_with_projected_grid=len(stamps["detections"] & stamps["projected_grids"]),
+                   projected_grids_without_cells=len(without_cells),
+                   objects_without_cells=len(stamps["objects"] & without_cells),
                    frames_lost=len(lost), lost_stamps_ns=lost[:100], drops=drops,
                    outputs=outputs)
     with open(args.summary, "w") as out:

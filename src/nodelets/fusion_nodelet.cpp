@@ -133,7 +133,7 @@ void FusionNodelet::onInit()
   ros::SubscriberStatusCallback connect_cb = boost::bind(&FusionNodelet::connectCb, this);
   image_transport::SubscriberStatusCallback image_connect_cb = boost::bind(&FusionNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  pub_objects_ = nh.advertise<DetectedObjectArray>("objects", 1, connect_cb, connect_cb);
+  pub_objects_ = nh.advertise<DetectedObjectArray>("objects", kResultQueueSize, connect_cb, connect_cb);
   pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("objects/markers", 1, connect_cb, connect_cb);
   pub_image_ = it_->advertise("objects/image", 1, image_connect_cb, image_connect_cb);
   if (!params.lazy)

@@ -41,6 +41,9 @@ namespace grid_vision_fusion
 namespace
 {
 constexpr double kThrottleS = 5.0;
+/// camera_infos waiting for the manager's threads: under load a queue of a few would lose them
+/// silently in roscpp, and each one is small and projected in under a millisecond.
+constexpr std::uint32_t kInfoQueueSize = 30;
 
 /// A camera_info with the grid it is projected with; it waits in the tf queue for the tf from
 /// the camera_info's frame (`header`, the camera_info's) to `frames` (the grid frame and
@@ -142,14 +145,13 @@ void GridProjectionNodelet::onInit()
   image_transport::SubscriberStatusCallback image_connect_cb =
       boost::bind(&GridProjectionNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", 1, connect_cb, connect_cb);
+  pub_projected_ = nh.advertise<ProjectedGrid>("projected_grid", kResultQueueSize, connect_cb, connect_cb);
   pub_image_ = it_->advertise("projected_grid/image", 1, image_connect_cb, image_connect_cb);
   if (!params.lazy)
   {
     // connectCb takes the lock itself; subscribe without it here.
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(params.queue_size),
-                             &GridProjectionNodelet::cameraInfoInCb, this);
+    sub_info_ = nh.subscribe("camera_info", kInfoQueueSize, &GridProjectionNodelet::cameraInfoInCb, this);
     sub_image_ = it_->subscribe("image", 2, &GridProjectionNodelet::imageCb, this,
                                 image_transport::TransportHints("raw", ros::TransportHints(), pnh));
   }
@@ -185,8 +187,7 @@ void GridProjectionNodelet::connectCb()
   else if (!sub_grid_)
   {
     sub_grid_ = nh.subscribe("grid", 1, &GridProjectionNodelet::gridCb, this);
-    sub_info_ = nh.subscribe("camera_info", static_cast<std::uint32_t>(params.queue_size),
-                             &GridProjectionNodelet::cameraInfoInCb, this);
+    sub_info_ = nh.subscribe("camera_info", kInfoQueueSize, &GridProjectionNodelet::cameraInfoInCb, this);
   }
   if (!overlay_wanted)
   {

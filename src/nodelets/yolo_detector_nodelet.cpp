@@ -147,7 +147,7 @@ void YoloDetectorNodelet::onInit()
   image_transport::SubscriberStatusCallback image_connect_cb =
       boost::bind(&YoloDetectorNodelet::connectCb, this);
   boost::lock_guard<boost::mutex> lock(connect_mutex_);
-  pub_detections_ = nh.advertise<Detection2DArray>("detections", 1, connect_cb, connect_cb);
+  pub_detections_ = nh.advertise<Detection2DArray>("detections", kResultQueueSize, connect_cb, connect_cb);
   pub_image_ = it_->advertise("detections/image", 1, image_connect_cb, image_connect_cb);
   if (!params.lazy)
   {

@@ -7,6 +7,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -18,6 +19,12 @@
 
 namespace grid_vision_fusion
 {
+/// The publisher queue of a stage's result topic (detections, projected grids, objects) for
+/// subscribers in other processes (rosbag record, a planner node, scripts/soak_monitor.py): a
+/// subscriber that falls behind for a moment under load gets every result instead of the newest
+/// one. Subscribers in the manager take each message by pointer, without this queue.
+constexpr std::uint32_t kResultQueueSize = 10;
+
 class StageDiagnostics
 {
 public:
