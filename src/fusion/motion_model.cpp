@@ -90,18 +90,6 @@ void MotionModel::setConfig(const MotionModelConfig& config)
   config_ = config;
 }
 
-double MotionModel::speedSigma() const
-{
-  const Eigen::Vector2d v = moving_.tail<2>();
-  const Eigen::Matrix2d p = moving_cov_.bottomRightCorner<2, 2>();
-  const double speed = v.norm();
-  if (speed < 1e-9)
-  {
-    return std::sqrt(0.5 * p.trace());
-  }
-  return std::sqrt(std::max(0.0, v.dot(p * v)) / (speed * speed));
-}
-
 void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
 {
   standing_ = position;

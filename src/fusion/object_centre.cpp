@@ -187,7 +187,6 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
                              double camera_y, const Footprint* footprint, bool& covers_more)
 {
   CentreEstimate estimate;
-  estimate.cluster_points = cx.size();
   estimate.yaw = fitOrientation(cx, cy);
   const double c = std::cos(estimate.yaw);
   const double s = std::sin(estimate.yaw);
@@ -223,11 +222,9 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
     estimate.length = std::max(footprint->length, length_along_a ? extent_a : extent_b);
     a_centre = axisCentre(e.a_lo, e.a_hi, a_cam, dim_a);
     b_centre = axisCentre(e.b_lo, e.b_hi, b_cam, dim_b);
-    estimate.source = CentreSource::kCompleted;
   }
   else
   {
-    estimate.source = CentreSource::kExtent;
     estimate.length = std::max(e.a_hi - e.a_lo, e.b_hi - e.b_lo);
     covers_more = false;
   }

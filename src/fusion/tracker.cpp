@@ -212,6 +212,13 @@ BoundingBox Tracker::BoxFilter::box() const
                      static_cast<float>(edges(3))};
 }
 
+Tracker::BoxFilter Tracker::BoxFilter::at(const BoundingBox& box)
+{
+  BoxFilter filter;
+  filter.edges = edgesOf(box);
+  return filter;
+}
+
 Tracker::BoxFilter Tracker::filteredBox(const Track& track, const BoundingBox& box, double stamp_s) const
 {
   const Eigen::Vector4d measured = edgesOf(box);
@@ -234,8 +241,7 @@ Tracker::BoxFilter Tracker::filteredBox(const Track& track, const BoundingBox& b
   // A filter that lost the box's shape (edges crossed) gives way to the detector's box.
   if (!filter.edges.allFinite() || filter.edges(2) <= filter.edges(0) || filter.edges(3) <= filter.edges(1))
   {
-    filter = BoxFilter();
-    filter.edges = measured;
+    filter = BoxFilter::at(box);
   }
   return filter;
 }
@@ -253,7 +259,7 @@ const std::string& Tracker::groupOf(const std::string& label) const
   return group == config_.label_groups.end() ? label : group->second;
 }
 
-TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
+TrackEstimate Tracker::estimateOf(const Track& track) const
 {
   TrackEstimate e;
   e.confirmed = track.confirmed;
@@ -268,9 +274,6 @@ TrackEstimate Tracker::estimateOf(const Track& track, double stamp_s) const
   const Eigen::Vector2d velocity = track.motion.movingVelocity();
   e.vx = velocity.x();
   e.vy = velocity.y();
-  e.speed_sigma = track.motion.speedSigma();
-  e.hits = track.hits;
-  e.age = stamp_s - track.first_stamp;
   e.located = track.located;
   return e;
 }
@@ -320,7 +323,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   estimates.reserve(observations.size());
   for (std::size_t o = 0; o < observations.size(); ++o)
   {
-    estimates.push_back(estimateOf(tracks_[track_of[o]], stamp_s));
+    estimates.push_back(estimateOf(tracks_[track_of[o]]));
   }
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const Track& track) { return track.misses > config_.max_misses; }),
@@ -388,8 +391,7 @@ void Tracker::updateTrack(Track& track, const TrackObservation& obs) const
     // association, but not its filter: their edges' rates lag where the box grows fastest (an
     // object approached, or coming into view), the first images with cells, and a band hung on
     // that lag misses the object's cells when its first centres set its motion model.
-    track.box_filter = BoxFilter();
-    track.box_filter.edges = edgesOf(obs.box);
+    track.box_filter = BoxFilter::at(obs.box);
   }
   track.last_seen = last_stamp_;
   track.label_votes[obs.label] += obs.score;
@@ -464,7 +466,7 @@ Tracker::Track Tracker::newTrack(const TrackObservation& obs, double stamp_s)
   track.group = groupOf(obs.label);
   track.motion = MotionModel(config_.motionFor(obs.label));
   track.box = obs.box;
-  track.box_filter.edges = edgesOf(obs.box);
+  track.box_filter = BoxFilter::at(obs.box);
   track.label_votes[obs.label] = obs.score;
   track.label_classes[obs.label] = obs.class_id;
   track.last_seen = stamp_s;

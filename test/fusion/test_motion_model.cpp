@@ -260,9 +260,11 @@ TEST(MotionModel, ARestartForgetsHowSureTheVelocityWas)
     model.update(Eigen::Vector2d(21.6, -6.0 + 1.0 * k));
   }
   ASSERT_GT(model.modeProbability(), 0.9);
-  ASSERT_LT(model.speedSigma(), 1.0);
+  // The standard deviation of its speed, along y.
+  auto speed_sigma = [&] { return std::sqrt(model.movingVelocityCovariance()(1, 1)); };
+  ASSERT_LT(speed_sigma(), 1.0);
   model.restartAt(Eigen::Vector2d(18.2, 4.0));
-  EXPECT_NEAR(model.speedSigma(), MotionModelConfig().speed_sigma, 1e-9);
+  EXPECT_NEAR(speed_sigma(), MotionModelConfig().speed_sigma, 1e-9);
   EXPECT_NEAR(model.movingVelocity().y(), 10.0, 0.5);
   for (int k = 1; k <= 6; ++k)
   {
@@ -315,7 +317,8 @@ TEST(MotionModel, TheCombinedStateWeighsTheModels)
   EXPECT_GT(model.distance2(Eigen::Vector2d(4.0, -2.0), noise), 0.0);
   model.predict(0.0);  // no time: nothing changes
   EXPECT_DOUBLE_EQ(model.modeProbability(), 0.25);
-  EXPECT_NEAR(model.speedSigma(), MotionModelConfig{}.speed_sigma, 1e-9);
+  const double v = MotionModelConfig{}.speed_sigma * MotionModelConfig{}.speed_sigma;
+  EXPECT_TRUE(model.movingVelocityCovariance().isApprox(v * Eigen::Matrix2d::Identity()));
 }
 
 TEST(MotionModel, LogCauchyIsTheBivariateStudentTWithOneDegreeOfFreedom)

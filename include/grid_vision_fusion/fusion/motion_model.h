@@ -138,9 +138,6 @@ public:
   /// measurement noise covariance `noise` [m²] (the tracker's association gate).
   double distance2(const Eigen::Vector2d& position, const Eigen::Matrix2d& noise) const;
 
-  /// Standard deviation of the constant-velocity model's speed [m/s] (along its velocity).
-  double speedSigma() const;
-
   /// Replaces the configuration, keeping the state. @throws std::invalid_argument when invalid.
   void setConfig(const MotionModelConfig& config);
   const MotionModelConfig& config() const { return config_; }

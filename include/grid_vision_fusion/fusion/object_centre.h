@@ -56,13 +56,6 @@ struct CentreConfig
 /// Fewest recently hit cells (CentreConfig::max_scans_since_hit) that make a centre on their own.
 constexpr std::size_t kMinFreshCentreCells = 3;
 
-/// Where a centre estimate comes from.
-enum class CentreSource : std::uint8_t
-{
-  kCompleted = 0,  ///< the object's cells and the class footprint completed away from the camera
-  kExtent = 1,     ///< the object's cells only (no footprint for the label)
-};
-
 /// An object centre estimate.
 struct CentreEstimate
 {
@@ -73,8 +66,6 @@ struct CentreEstimate
   /// axis where they cover more (without a footprint: their larger extent). Where the object's
   /// view is cut, its visible part, and the centre with it, may lie anywhere along it.
   double length = 0.0;
-  std::size_t cluster_points = 0;  ///< cells it comes from (the cluster's, or its recently hit ones)
-  CentreSource source = CentreSource::kCompleted;
 };
 
 /// Orientation in [0, π/2) of the rectangle that fits the 2-D points (x[i], y[i]) best by the

@@ -133,9 +133,6 @@ struct TrackEstimate
   double y = 0.0;
   double vx = 0.0;  ///< the constant-velocity model's velocity [m/s]: the velocity should it move
   double vy = 0.0;
-  double speed_sigma = 0.0;  ///< standard deviation of that speed [m/s]
-  int hits = 0;              ///< images with an observation, this one included
-  double age = 0.0;          ///< time since the track's first observation [s]
   /// Whether the track has a position of its own: it has had an observation with cells. Without,
   /// x, y, p_dynamic are the observation's box position and 0.5.
   bool located = false;
@@ -190,6 +187,8 @@ private:
     Eigen::Vector4d rates = Eigen::Vector4d::Zero();
     bool has_rates = false;
     BoundingBox box() const;
+    /// A filter that starts at `box`, without rates.
+    static BoxFilter at(const BoundingBox& box);
   };
 
   /// The lidar hits of a track's object in one image.
@@ -241,7 +240,7 @@ private:
   std::deque<ObservedHits> hitsBefore(const TrackObservation& observation, const MotionModel& motion) const;
   /// A tentative track for an observation left over.
   Track newTrack(const TrackObservation& observation, double stamp_s);
-  TrackEstimate estimateOf(const Track& track, double stamp_s) const;
+  TrackEstimate estimateOf(const Track& track) const;
   /// The track's box filter after taking `box` at `stamp_s`.
   BoxFilter filteredBox(const Track& track, const BoundingBox& box, double stamp_s) const;
   /// The label the track's objects had most often (score-weighted).
