@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Watches a running nodelet chain for scripts/soak.sh: counts the camera frames, detections and
-objects messages (and the projected grids without cells: the grid too old for the image), measures the wall-clock latency from a frame's arrival to its objects, samples
-the nodelet manager's resident memory, and collects every ERROR or FATAL that reaches /rosout and
-the stages' drops by reason from /diagnostics. Writes CSV samples and a JSON summary when the bag
+objects messages (and the projected grids without cells: the grid too old for the image),
+measures the wall-clock latency from a frame's arrival to its objects, samples the nodelet
+manager's resident memory, and collects every ERROR or FATAL that reaches /rosout and the stages'
+drops by reason from /diagnostics. Writes CSV samples and a JSON summary when the bag
 has been played (the player's node leaves the graph) or on SIGINT.
 
 A frame is its camera_info, which the bag plays with the scan and the image of the same stamp: the

@@ -72,7 +72,7 @@ struct PipelineStats
   std::size_t projections_without_cells = 0;  ///< of `projections`: the grid too old for the image
   std::size_t fusion_drops = 0;               ///< pairs refused, or an output without partner
   std::size_t grid_resets = 0;
-  std::vector<std::string> warnings;  ///< the first few distinct reasons of drops (for the user)
+  std::vector<std::string> warnings;  ///< first few distinct reasons: drops, projections without cells
 };
 
 /// Where the outputs go; each may be empty.
