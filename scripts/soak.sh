@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Soak test of the nodelet chain (doc/reliability.md): kitti_replay.launch at real-time rate with
 # the replay detector over a long synthetic drive (config/synthetic_drive_long.yaml: 3000 frames),
-# watched by scripts/soak_monitor.py. Passes when no camera frame is lost between the bag and
+# watched by scripts/soak_monitor.py (counts, memory, errors, drops) and latency_probe (the
+# wall-clock latency from each frame's camera_info to its objects, in C++). Passes when no camera frame is lost between the bag and
 # the objects, the nodelet manager's resident memory grows by less than 5 % between frame 500
 # and the end, and no ERROR is logged. Images before the chain's first output (no grid exists yet)
 # are counted apart.
@@ -18,7 +19,8 @@
 #   --model M --weights FILE   run the network (OpenCV DNN) instead of replaying the labels,
 #                    e.g. models/yolo/yolov3-tiny.cfg and weights from `bench_yolo --write-weights`
 #   -- ARG...        further kitti_replay.launch arguments, e.g. grid_config:=/tmp/grid.yaml
-# Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames), DIR/replay.log.
+# Writes DIR/soak.json (figures), DIR/memory.csv (manager memory every 100 frames),
+# DIR/latencies.csv (each frame's latency), DIR/replay.log.
 set -eo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -87,8 +89,12 @@ done
 [[ -n "$manager" ]] || { kill "$launch"; echo "soak: the nodelet manager did not start: see $out/replay.log" >&2; exit 1; }
 # The chain stays up after the bag (player_required:=false) until the monitor has its last
 # messages and diagnostics, then the launch is ended.
+rosrun grid_vision_fusion latency_probe --output "$out/latencies.csv" 2>>"$out/replay.log" &
+probe=$!
 python3 "$root/scripts/soak_monitor.py" --manager-pid "$manager" --samples "$out/memory.csv" \
   --summary "$out/monitor.json"
+kill -INT "$probe" 2>/dev/null || true
+wait "$probe" || true
 kill -INT "$launch" 2>/dev/null || true
 wait "$launch" || true
 [[ "$keep" == true ]] || rm -rf "$out/drive.bag" "$out/kitti"
@@ -97,6 +103,9 @@ python3 - "$out" <<'PY'
 import csv, json, sys
 out = sys.argv[1]
 monitor = json.load(open(out + "/monitor.json"))
+latencies = sorted(float(r["latency_s"]) for r in csv.DictReader(open(out + "/latencies.csv")) if r["latency_s"])
+quantile = lambda q: latencies[min(len(latencies) - 1, int(q * len(latencies)))] if latencies else None
+monitor.update(latency_median_s=quantile(0.5), latency_p99_s=quantile(0.99), latency_frames=len(latencies))
 rows = [r for r in csv.DictReader(open(out + "/memory.csv"))]
 after_500 = [float(r["manager_rss_mib"]) for r in rows if int(r["objects_messages"]) >= 500]
 growth = 100.0 * (after_500[-1] - after_500[0]) / after_500[0] if len(after_500) > 1 else float("nan")

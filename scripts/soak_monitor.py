@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Watches a running nodelet chain for scripts/soak.sh: counts the camera frames, detections and
 objects messages (and the projected grids without cells: the grid too old for the image),
-measures the wall-clock latency from a frame's arrival to its objects, samples the nodelet
-manager's resident memory, and collects every ERROR or FATAL that reaches /rosout and the stages'
-drops by reason from /diagnostics. Writes CSV samples and a JSON summary when the bag
-has been played (the player's node leaves the graph) or on SIGINT.
+samples the nodelet manager's resident memory, and collects every ERROR or FATAL that reaches
+/rosout and the stages' drops by reason from /diagnostics. Writes CSV samples and a JSON summary
+when the bag has been played (the player's node leaves the graph) or on SIGINT. The latency is
+measured by latency_probe (C++): this Python monitor, its threads taking turns on the interpreter
+lock, noted arrivals late under overload.
 
 A frame is its camera_info, which the bag plays with the scan and the image of the same stamp: the
 monitor does not subscribe to the images themselves (1.4 MB each, deserialised in Python), which
@@ -64,7 +65,6 @@ def main():
     # "images": camera frames (camera_infos); a frame's objects need its detections and its projected grid.
     counts = {"images": 0, "detections": 0, "projected_grids": 0, "objects": 0}
     stamps = {name: set() for name in counts}
-    arrivals = {"camera_info": {}, "objects": {}}  # header stamp [ns] -> first wall arrival [s]
     errors = []
     samples = open(args.samples, "w")
     samples.write("objects_messages,wall_s,manager_rss_mib\n")
@@ -82,11 +82,6 @@ def main():
                 samples.write("%d,%.1f,%.2f\n" % (counts["objects"], time.time() - start,
                                                   resident_mib(args.manager_pid)))
                 samples.flush()
-        return callback
-
-    def arrival(name):
-        def callback(msg):
-            arrivals[name].setdefault(header_stamp(msg), time.time())
         return callback
 
     drops = {}  # diagnostic status name -> {reason: inputs dropped so far}, from the latest report
@@ -110,8 +105,6 @@ def main():
     rospy.Subscriber("/detections", rospy.AnyMsg, counter("detections"), queue_size=None)
     rospy.Subscriber("/projected_grid", rospy.AnyMsg, counter("projected_grids"), queue_size=None)
     rospy.Subscriber("/objects", rospy.AnyMsg, counter("objects"), queue_size=None)
-    rospy.Subscriber("/objects", rospy.AnyMsg, arrival("objects"), queue_size=None)
-    rospy.Subscriber(args.camera_info, rospy.AnyMsg, arrival("camera_info"), queue_size=None)
     rospy.Subscriber(args.camera_info, rospy.AnyMsg, counter("images"), queue_size=None)
     rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000)
     rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics, queue_size=100)
@@ -135,11 +128,7 @@ def main():
     # Images before the chain's first output met a chain still starting (no grid yet).
     first = min(stamps["objects"]) if stamps["objects"] else None
     lost = sorted(t for t in stamps["images"] if first is not None and t > first and t not in stamps["objects"])
-    latencies = sorted(t - arrivals["camera_info"][s] for s, t in arrivals["objects"].items()
-                       if s in arrivals["camera_info"])
-    percentile = (lambda q: latencies[min(len(latencies) - 1, int(q * len(latencies)))] if latencies else None)
     summary = dict(counts, errors=errors, wall_s=time.time() - start,
-                   latency_median_s=percentile(0.5), latency_p99_s=percentile(0.99), latency_frames=len(latencies),
                    images_before_first_output=sum(1 for t in stamps["images"] if first is None or t < first),
                    detections_with_projected_grid=len(stamps["detections"] & stamps["projected_grids"]),
                    projected_grids_without_cells=len(without_cells),

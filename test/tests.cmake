@@ -65,6 +65,10 @@ gvf_gtest(test_tools
     MAKE_SYNTHETIC_DRIVE="$<TARGET_FILE:make_synthetic_drive>" DETECT="$<TARGET_FILE:detect>"
   DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive detect)
 
+gvf_rostest(test_latency_probe LAUNCH test/tools/latency_probe.test SOURCES test/tools/test_latency_probe.cpp
+  DEPENDS latency_probe)
+target_compile_definitions(test_latency_probe PRIVATE LATENCY_PROBE="$<TARGET_FILE:latency_probe>")
+
 # --- nodelets in a manager (rostest) -----------------------------------------------------------
 gvf_rostest(test_dynamic_grid_nodelet LAUNCH test/nodelets/dynamic_grid_nodelet.test
   SOURCES test/nodelets/test_dynamic_grid_nodelet.cpp)

@@ -1,0 +1,149 @@
+// latency_probe (scripts/soak.sh): one CSV row per camera frame with the wall-clock latency to the
+// objects of the same stamp, empty when none came; written when the probe is ended with SIGINT.
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "grid_vision_fusion/DetectedObjectArray.h"
+
+extern char** environ;
+
+namespace
+{
+namespace fs = std::filesystem;
+
+/// The rows of a CSV file after its header, split at the commas (an empty last field kept).
+std::vector<std::vector<std::string>> csvRows(const fs::path& path)
+{
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line))
+  {
+    std::vector<std::string> fields;
+    std::stringstream stream(line);
+    std::string field;
+    while (std::getline(stream, field, ','))
+    {
+      fields.push_back(field);
+    }
+    if (!line.empty() && line.back() == ',')
+    {
+      fields.emplace_back();
+    }
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
+bool waitFor(const std::function<bool()>& condition)
+{
+  for (int i = 0; i < 500 && !condition(); ++i)
+  {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return condition();
+}
+
+TEST(LatencyProbe, WritesEachFramesLatencyToItsObjectsAndLeavesItEmptyWithout)
+{
+  const fs::path csv = fs::temp_directory_path() / ("latency_probe_" + std::to_string(getpid()) + ".csv");
+  ros::NodeHandle nh;
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/kitti/camera_color_left/camera_info", 10);
+  ros::Publisher objects_pub = nh.advertise<grid_vision_fusion::DetectedObjectArray>("/objects", 10);
+
+  const std::string program = LATENCY_PROBE;
+  const std::string output = csv.string();
+  std::vector<char*> argv{const_cast<char*>(program.c_str()), const_cast<char*>("--output"),
+                          const_cast<char*>(output.c_str()), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ), 0) << program;
+  ASSERT_TRUE(
+      waitFor([&] { return info_pub.getNumSubscribers() > 0 && objects_pub.getNumSubscribers() > 0; }))
+      << "the probe did not subscribe";
+
+  sensor_msgs::CameraInfo info;
+  info.header.stamp = ros::Time(100, 0);
+  info_pub.publish(info);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  grid_vision_fusion::DetectedObjectArray objects;
+  objects.header.stamp = info.header.stamp;
+  objects_pub.publish(objects);
+  objects_pub.publish(objects);  // a second array of the same stamp does not count
+  info.header.stamp = ros::Time(100, 100000000);
+  info_pub.publish(info);  // no objects for this one
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+
+  const auto rows = csvRows(csv);
+  ASSERT_EQ(rows.size(), 2U);
+  ASSERT_EQ(rows[0].size(), 3U);
+  EXPECT_EQ(rows[0][0], "100000000000");
+  EXPECT_GT(std::stod(rows[0][2]), 0.09);  // published 0.1 s after the camera_info
+  EXPECT_LT(std::stod(rows[0][2]), 0.3);
+  ASSERT_EQ(rows[1].size(), 3U);
+  EXPECT_EQ(rows[1][0], "100100000000");
+  EXPECT_EQ(rows[1][2], "");
+  fs::remove(csv);
+}
+/// Exit status and output (stdout and stderr) of `arguments` given to the probe.
+std::pair<int, std::string> runProbe(const std::string& arguments)
+{
+  std::string output;
+  FILE* pipe = popen((std::string(LATENCY_PROBE) + " " + arguments + " 2>&1").c_str(), "r");
+  char buffer[512];
+  while (pipe != nullptr && std::fgets(buffer, sizeof(buffer), pipe) != nullptr)
+  {
+    output += buffer;
+  }
+  const int status = pipe == nullptr ? -1 : pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+TEST(LatencyProbe, NamesTheOptionOrTheFileAtFault)
+{
+  const auto [unwritable_status, unwritable] = runProbe("--output /nonexistent_gvf_dir/latencies.csv");
+  EXPECT_EQ(unwritable_status, 1);
+  EXPECT_NE(unwritable.find("cannot write --output /nonexistent_gvf_dir/latencies.csv"), std::string::npos)
+      << unwritable;
+  const auto [missing_status, missing] = runProbe("--output x.csv --objects");
+  EXPECT_EQ(missing_status, 1);
+  EXPECT_NE(missing.find("missing the value of --objects"), std::string::npos) << missing;
+  const auto [unknown_status, unknown] = runProbe("--outptu x.csv");
+  EXPECT_EQ(unknown_status, 1);
+  EXPECT_NE(unknown.find("unknown option --outptu"), std::string::npos) << unknown;
+  const auto [none_status, none] = runProbe("");
+  EXPECT_EQ(none_status, 1);
+  EXPECT_NE(none.find("give --output"), std::string::npos) << none;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_latency_probe");
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
