@@ -57,8 +57,8 @@ private:
   // The flow on /diagnostics (reads the stage; the callbacks below feed it: declared between).
   std::unique_ptr<StageDiagnostics> diagnostics_;
 
-  // The newest cloud with its tf, for the filter on the manager's multi-threaded queue: a cloud
-  // that comes while the filter is busy replaces a waiting one instead of queueing (overload).
+  // The newest cloud with its tf, for the filter on the slot's own thread: a cloud that comes
+  // while the filter is busy replaces a waiting one instead of queueing (overload).
   // Ended first in the destructor; destroyed after the tf queue that feeds it.
   std::unique_ptr<NewestSlot<sensor_msgs::PointCloud2::ConstPtr>> slot_;
 
@@ -96,7 +96,7 @@ DynamicGridNodelet::~DynamicGridNodelet()
   tf_polling_.reset();  // nothing hands the slot a cloud any more
   if (slot_)
   {
-    slot_->end();  // waits for a running filter cycle; the queued ones do nothing
+    slot_->end();  // waits for a running filter cycle; a waiting cloud is not filtered
   }
 }
 
@@ -131,8 +131,8 @@ void DynamicGridNodelet::onInit()
                                                boost::placeholders::_1, boost::placeholders::_2));
 
   slot_ = std::make_unique<NewestSlot<sensor_msgs::PointCloud2::ConstPtr>>(
-      [this](const sensor_msgs::PointCloud2::ConstPtr& cloud,
-             const std::optional<sensor_msgs::PointCloud2::ConstPtr>& replaced)
+      "dynamic_grid", [this](const sensor_msgs::PointCloud2::ConstPtr& cloud,
+                             const std::optional<sensor_msgs::PointCloud2::ConstPtr>& replaced)
       { process(cloud, replaced); });
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
@@ -233,7 +233,7 @@ void DynamicGridNodelet::tfFailureCb(const sensor_msgs::PointCloud2::ConstPtr& c
 
 void DynamicGridNodelet::cloudCb(const sensor_msgs::PointCloud2::ConstPtr& cloud_msg)
 {
-  if (slot_->offer(cloud_msg, getMTCallbackQueue(), reinterpret_cast<std::uint64_t>(this)))
+  if (slot_->offer(cloud_msg))
   {
     diagnostics_->drop("older scan replaced by a newer one (the filter is slower than the lidar)");
   }

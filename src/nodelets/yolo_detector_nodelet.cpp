@@ -61,10 +61,8 @@ private:
   double score_threshold_ = 0.0;
   double nms_threshold_ = 0.0;
 
-  /// The newest image for the inference on the manager's multi-threaded queue: an image that
-  /// comes during an inference replaces a waiting one. The manager may delete a nodelet from a
-  /// worker thread after it has freed the nodelet's queues (at shutdown; ASan saw a destructor
-  /// read the freed queue), so the destructor only ends the slot (OwnedCallbacks).
+  /// The newest image for the inference on the slot's own thread: an image that comes during an
+  /// inference replaces a waiting one.
   std::unique_ptr<NewestSlot<PendingFrame>> slot_;
 
   // Counters and timing for diagnostics.
@@ -94,7 +92,7 @@ YoloDetectorNodelet::~YoloDetectorNodelet()
   sub_image_.shutdown();
   if (slot_)
   {
-    slot_->end();  // waits for a running inference; the queued ones do nothing
+    slot_->end();  // waits for a running inference; a waiting image is not detected
   }
 }
 
@@ -136,6 +134,7 @@ void YoloDetectorNodelet::onInit()
       [this](diagnostic_updater::DiagnosticStatusWrapper& status) { diagnose(status); });
 
   slot_ = std::make_unique<NewestSlot<PendingFrame>>(
+      "yolo_detector",
       [this](const PendingFrame& frame, const std::optional<PendingFrame>& /*replaced*/) { process(frame); });
 
   reconfigure_server_ = std::make_unique<ReconfigureServer>(pnh);
@@ -204,9 +203,9 @@ void YoloDetectorNodelet::imageCb(const sensor_msgs::Image::ConstPtr& image_msg)
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++frames_received_;
   }
-  // Inference runs on the manager's multi-threaded queue; this callback returns at once so that
-  // the newest frame always replaces a waiting one.
-  if (slot_->offer({image_msg, frame_index}, getMTCallbackQueue(), reinterpret_cast<std::uint64_t>(this)))
+  // Inference runs on the slot's thread; this callback returns at once so that the newest frame
+  // always replaces a waiting one.
+  if (slot_->offer({image_msg, frame_index}))
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++frames_dropped_;  // inference is slower than the camera: the older frame is dropped
