@@ -13,6 +13,7 @@
 
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/fusion/fusion.h"
+#include "grid_vision_fusion/fusion/object_tracking.h"
 #include "grid_vision_fusion/fusion/tracker.h"
 
 namespace grid_vision_fusion

@@ -485,4 +485,34 @@ std::string checkFusionInputs(const std::vector<Detection>& detections, std::uin
   return {};
 }
 
+void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
+                     const ProjectedPointsView& points, double camera_x, double camera_y,
+                     const CentreConfig& config)
+{
+  for (FusedObject& object : result.objects)
+  {
+    if (object.detection_index >= detections.size())
+    {
+      throw std::invalid_argument("estimateCentres: detection index " +
+                                  std::to_string(object.detection_index) + " outside the " +
+                                  std::to_string(detections.size()) + " detections");
+    }
+    if (object.members.empty())
+    {
+      continue;  // no cell: placeOnGround() places it
+    }
+    const Detection& detection = detections[object.detection_index];
+    const auto footprint = config.footprints.find(detection.label);
+    const Footprint* size = footprint == config.footprints.end() ? nullptr : &footprint->second;
+    // fuse() has found the object's cluster already (at the same cluster distance).
+    const CentreEstimate centre =
+        object.cluster.empty()
+            ? estimateCentre(points, object.members, detection.box, camera_x, camera_y, size, config)
+            : centreOfCluster(points, object.cluster, camera_x, camera_y, size, config.max_scans_since_hit);
+    object.x = centre.x;
+    object.y = centre.y;
+    object.length = centre.length;
+  }
+}
+
 }  // namespace grid_vision_fusion

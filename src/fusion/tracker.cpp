@@ -25,12 +25,6 @@ void requirePositive(const char* name, double value)
   }
 }
 
-/// A box edge this close to the image's left or right edge [px] cuts the object.
-constexpr float kTruncationMarginPx = 1.F;
-/// The same as a share of the image width, for a trained detector whose box edges stop a few
-/// pixels short of the image's (YOLOv5s at 640 px on KITTI's 1242 px: up to 7 px, 0.6 %).
-constexpr float kTruncationMargin = 0.01F;
-
 /// How far back the lidar hits of a track's objects are registered [s]: three scans at 10 Hz,
 /// in which an object at 1 m/s moves 1.5 cells of 0.2 m (doc/nodelets/fusion.md, "Motion model").
 constexpr double kRegistrationSpan = 0.3;
@@ -47,13 +41,6 @@ void dropBeforeSpan(std::deque<Hits>& hits, double stamp_s)
   {
     hits.pop_front();
   }
-}
-
-/// Whether the lidar hit the cell of point `i` in the grid's scan (every point, where the view does
-/// not say).
-bool isHit(const ProjectedPointsView& points, std::size_t i)
-{
-  return points.scans_since_hit == nullptr || points.scans_since_hit[i] == 0;
 }
 
 /// The edges (x_min, y_min, x_max, y_max) of `box` [px].
@@ -138,6 +125,18 @@ void Tracker::setConfig(const TrackerConfig& config)
   {
     track.motion.setConfig(config_.motionFor(majorityLabel(track)));
   }
+}
+
+std::string Tracker::resetReason(double stamp_s) const
+{
+  const double gap = stamp_s - last_stamp_;
+  if (!has_stamp_ || (gap >= 0.0 && gap <= config_.max_gap))
+  {
+    return {};
+  }
+  return gap < 0.0 ? "time jumped backwards by " + std::to_string(-gap) + " s"
+                   : "gap of " + std::to_string(gap) + " s since the last pair exceeds track_max_gap (" +
+                         std::to_string(config_.max_gap) + " s)";
 }
 
 void Tracker::reset()
@@ -282,7 +281,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
                                            std::vector<Eigen::Vector2d> scene_hits,
                                            const Eigen::Vector2d& camera)
 {
-  if (has_stamp_ && (stamp_s < last_stamp_ || stamp_s - last_stamp_ > config_.max_gap))
+  if (!resetReason(stamp_s).empty())
   {
     reset();
   }
@@ -511,80 +510,6 @@ std::deque<Tracker::ObservedHits> Tracker::hitsBefore(const TrackObservation& ob
     before.push_back(std::move(near));
   }
   return before;
-}
-
-void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
-                  const Eigen::Vector2d& camera)
-{
-  std::vector<TrackObservation> observations;
-  observations.reserve(result.objects.size());
-  const float margin = std::max(kTruncationMarginPx, kTruncationMargin * static_cast<float>(image_width));
-  const float right_edge = static_cast<float>(image_width) - margin;
-  for (const FusedObject& object : result.objects)
-  {
-    const Detection& detection = detections.at(object.detection_index);
-    TrackObservation o;
-    o.label = detection.label;
-    o.score = detection.score;
-    o.class_id = detection.class_id;
-    o.box = detection.box;
-    o.x = object.x;
-    o.y = object.y;
-    o.truncated = detection.box.x_min <= margin || detection.box.x_max >= right_edge;
-    o.length = object.length;
-    o.grid = object.grid;
-    o.supported = object.support == ObjectSupport::kCells;
-    o.cells.reserve(object.cluster.size());
-    for (std::uint32_t i : object.cluster)
-    {
-      o.cells.emplace_back(points.x[i], points.y[i]);
-      if (isHit(points, i))
-      {
-        o.hits.emplace_back(points.x[i], points.y[i]);
-      }
-    }
-    o.cell_size = points.resolution;
-    observations.push_back(std::move(o));
-  }
-  std::vector<Eigen::Vector2d> scene_hits;
-  scene_hits.reserve(points.size);
-  for (std::size_t i = 0; i < points.size; ++i)
-  {
-    if (isHit(points, i))
-    {
-      scene_hits.emplace_back(points.x[i], points.y[i]);
-    }
-  }
-  const std::vector<TrackEstimate> estimates =
-      tracker.update(stamp_s, observations, std::move(scene_hits), camera);
-  for (std::size_t i = 0; i < result.objects.size(); ++i)
-  {
-    FusedObject& object = result.objects[i];
-    const TrackEstimate& track = estimates[i];
-    object.id = track.id;
-    object.label = track.label;
-    object.class_id = track.class_id;
-    object.track_state = track.confirmed ? TrackState::kConfirmed : TrackState::kTentative;
-    if (object.support != ObjectSupport::kCells)
-    {
-      // No cell says anything about its motion in this image: its track's prediction, or its box.
-      object.support = track.located ? ObjectSupport::kTrack : ObjectSupport::kBox;
-      object.p_dynamic = track.located ? track.p_dynamic : 0.5;
-      object.x = track.located ? track.x : object.x;
-      object.y = track.located ? track.y : object.y;
-      continue;
-    }
-    object.p_dynamic = track.p_dynamic;
-    object.motion = track.motion;
-    object.x = track.x;
-    object.y = track.y;
-    const bool dynamic = track.motion == Motion::kDynamic;
-    object.vx = dynamic ? track.vx : 0.0;
-    object.vy = dynamic ? track.vy : 0.0;
-    object.heading = dynamic ? std::atan2(track.vy, track.vx) : 0.0;
-  }
-  result.tracked = true;
 }
 
 }  // namespace grid_vision_fusion

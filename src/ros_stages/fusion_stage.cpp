@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "grid_vision_fusion/fusion/object_tracking.h"
 #include "grid_vision_fusion/ros/fusion_conversions.h"
 
 namespace grid_vision_fusion
@@ -80,18 +81,7 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   }
   if (params_.tracking)
   {
-    const double gap = stamp - last_stamp_;
-    if (has_stamp_ && gap < 0.0)
-    {
-      pair.tracks_reset = "time jumped backwards by " + std::to_string(-gap) + " s";
-    }
-    else if (has_stamp_ && gap > params_.tracker.max_gap)
-    {
-      pair.tracks_reset = "gap of " + std::to_string(gap) + " s since the last pair exceeds track_max_gap (" +
-                          std::to_string(params_.tracker.max_gap) + " s)";
-    }
-    has_stamp_ = true;
-    last_stamp_ = stamp;
+    pair.tracks_reset = tracker_.resetReason(stamp);
     trackObjects(tracker_, stamp, pair.detections, detections.image_width, points, pair.result,
                  Eigen::Vector2d(grid.camera_position.x, grid.camera_position.y));
   }

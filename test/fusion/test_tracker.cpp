@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "grid_vision_fusion/fusion/object_tracking.h"
 #include "grid_vision_fusion/fusion/tracker.h"
 
 namespace grid_vision_fusion
@@ -957,8 +958,12 @@ TEST(Tracker, OverlappingBoxesPassTheGateWhenThePositionJumps)
 TEST(Tracker, TimeGoingBackOrAGapResetsTheTracks)
 {
   Tracker tracker;
+  EXPECT_EQ(tracker.resetReason(5.0), "");  // nothing to start over from
   tracker.update(5.0, {observe("car", 10.0, 0.0, 300.F)});
   tracker.update(5.1, {observe("car", 10.0, 0.0, 300.F)});
+  EXPECT_EQ(tracker.resetReason(6.1), "");  // max_gap 1 s: still one track
+  EXPECT_NE(tracker.resetReason(6.2).find("gap of 1.1"), std::string::npos) << tracker.resetReason(6.2);
+  EXPECT_NE(tracker.resetReason(4.0).find("time jumped backwards by 1.1"), std::string::npos);
   EXPECT_EQ(tracker.update(4.0, {observe("car", 10.0, 0.0, 300.F)})[0].id, 2U);  // bag restarted
   tracker.update(4.1, {observe("car", 10.0, 0.0, 300.F)});
   EXPECT_EQ(tracker.update(6.0, {observe("car", 10.0, 0.0, 300.F)})[0].id, 3U);  // 1.9 s gap

@@ -28,7 +28,6 @@
 #include <string>
 #include <vector>
 
-#include "grid_vision_fusion/fusion/fusion.h"
 #include "grid_vision_fusion/fusion/motion_model.h"
 #include "grid_vision_fusion/types.h"
 
@@ -149,8 +148,8 @@ public:
   explicit Tracker(const TrackerConfig& config = TrackerConfig());
 
   /// Processes the observations of the image at `stamp_s` [s]: one estimate per observation,
-  /// in the same order. Stamps must increase; a stamp earlier than the last one, or later by
-  /// more than max_gap, first drops every track (ids keep counting up).
+  /// in the same order. Stamps must increase; where resetReason(stamp_s) gives a reason, every
+  /// track is dropped first (ids keep counting up).
   /// `scene_hits` are all the cells the lidar hit in the image's scan within the camera's view
   /// [m], fixed frame, on the observations' lattice: an object is hit before it is detected (or
   /// while its detections are missed), so a new track registers its first hits against those of
@@ -174,6 +173,9 @@ public:
   void setConfig(const TrackerConfig& config);
   const TrackerConfig& config() const { return config_; }
 
+  /// Why update() at `stamp_s` [s] starts over (a stamp earlier than the last one: a bag loop;
+  /// or later by more than max_gap), empty when it goes on.
+  std::string resetReason(double stamp_s) const;
   /// Drops every track (ids keep counting up).
   void reset();
   /// Tracks alive (tentative and confirmed).
@@ -268,19 +270,6 @@ private:
   Eigen::Vector2d last_camera_ = Eigen::Vector2d::Constant(kNotKnown);  ///< at last_stamp_ [m]
   double camera_speed_ = kNotKnown;  ///< between the last two images [m/s]; NaN: not known
 };
-
-/// Runs `tracker` on the objects of `result` at `stamp_s` [s]: every object becomes a track
-/// observation (label and box of its detection, its centre, whether the box touches the left or
-/// right edge of an image `image_width` pixels wide, the grid's evidence of its cells, its
-/// cluster's cells in `points`), and every cell of `points` the lidar hit in the grid's scan is
-/// a hit of the scene (Tracker::update()); every object takes its track's id, state (tentative
-/// or confirmed), P(dynamic), verdict, filtered position and, when dynamic, velocity and heading
-/// (static and unknown ones zero, as the message says). An object without cells keeps motion
-/// unknown and takes its track's predicted position when the track has one (support kTrack), else
-/// keeps its box's. Sets result.tracked.
-void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
-                  std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
-                  const Eigen::Vector2d& camera = Eigen::Vector2d::Constant(kNotKnown));
 
 /// Intersection over union of two boxes (continuous pixel coordinates), 0 when disjoint or empty.
 double boxOverlap(const BoundingBox& a, const BoundingBox& b);

@@ -60,8 +60,6 @@ public:
 private:
   FusionParams params_;
   Tracker tracker_;
-  bool has_stamp_ = false;
-  double last_stamp_ = 0.0;  ///< of the last pair tracked
 };
 
 }  // namespace grid_vision_fusion
