@@ -7,13 +7,12 @@
 
 #include "grid_vision_fusion/detection/detection_replay.h"
 #include "grid_vision_fusion/grid/dynamic_grid_filter.h"  // inverseNormalCdf
+#include "grid_vision_fusion/splitmix64.h"
 
 namespace grid_vision_fusion
 {
 namespace
 {
-constexpr double kPi = 3.14159265358979323846;
-
 /// The noise streams, one per component.
 enum class Stream : std::uint64_t
 {
@@ -32,16 +31,14 @@ double normalQuantile(double p)
 {
   const double x = inverseNormalCdf(p);
   const double e = 0.5 * std::erfc(-x / std::sqrt(2.0)) - p;
-  const double u = e * std::sqrt(2.0 * kPi) * std::exp(x * x / 2.0);
+  const double u = e * std::sqrt(2.0 * M_PI) * std::exp(x * x / 2.0);
   return x - u / (1.0 + x * u / 2.0);
 }
 
+/// The first number of a SplitMix64 stream seeded with `x`: a hash that chains the seed's parts.
 std::uint64_t splitMix(std::uint64_t x)
 {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27U)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31U);
+  return SplitMix64(x).next();
 }
 
 /// A counter-based generator (SplitMix64) seeded by (seed, frame, stream, index). Its normal and
@@ -54,19 +51,11 @@ public:
     std::uint64_t h = splitMix(seed);
     h = splitMix(h ^ static_cast<std::uint64_t>(frame));
     h = splitMix(h ^ static_cast<std::uint64_t>(stream));
-    state_ = splitMix(h ^ index);
+    random_ = SplitMix64(splitMix(h ^ index));
   }
 
   /// Uniform in [0, 1).
-  double uniform()
-  {
-    state_ += 0x9E3779B97F4A7C15ULL;
-    std::uint64_t z = state_;
-    z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31U;
-    return static_cast<double>(z >> 11U) * 0x1.0p-53;
-  }
+  double uniform() { return static_cast<double>(random_.next() >> 11U) * 0x1.0p-53; }
   bool bernoulli(double p) { return uniform() < p; }
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
   /// Standard normal (Box-Muller, one value per pair of uniforms).
@@ -74,7 +63,7 @@ public:
   {
     const double u1 = 1.0 - uniform();  // (0, 1]
     const double u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
   /// Standard normal truncated to [a, inf), by inversion.
   double normalAbove(double a)
@@ -106,7 +95,7 @@ public:
   }
 
 private:
-  std::uint64_t state_ = 0;
+  SplitMix64 random_;
 };
 
 double sigmoid(double x)

@@ -12,7 +12,7 @@ namespace grid_vision_fusion
 {
 namespace
 {
-constexpr float kPi = 3.14159265358979323846F;
+constexpr auto kPi = static_cast<float>(M_PI);
 constexpr float kInf = std::numeric_limits<float>::infinity();
 /// How far before a sector's nearest obstacle its ground is read for the cells at and behind that
 /// obstacle [m] (groundHeightAt()): before the range bins the obstacle's own low points fall in.

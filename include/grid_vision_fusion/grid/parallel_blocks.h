@@ -15,6 +15,8 @@
 #include <memory>
 #include <vector>
 
+#include "grid_vision_fusion/splitmix64.h"
+
 namespace grid_vision_fusion
 {
 /// Runs f(block) for block = 0 .. blocks - 1: inline and in order with one thread, otherwise in a
@@ -86,17 +88,13 @@ class BlockRandom
 {
 public:
   BlockRandom(std::uint32_t seed, std::uint64_t cycle, std::uint32_t pass, std::uint64_t block)
-      : state_(
-            mix(mix(mix(0x5EEDF00DULL + seed) ^ cycle) ^ ((static_cast<std::uint64_t>(pass) << 48) + block)))
+      : random_(SplitMix64::mix(SplitMix64::mix(SplitMix64::mix(0x5EEDF00DULL + seed) ^ cycle) ^
+                                ((static_cast<std::uint64_t>(pass) << 48) + block)))
   {
   }
 
   /// 64 random bits.
-  std::uint64_t next()
-  {
-    state_ += 0x9E3779B97F4A7C15ULL;
-    return mix(state_);
-  }
+  std::uint64_t next() { return random_.next(); }
 
   /// 16 random bits (four per call of next()).
   std::uint32_t bits16()
@@ -116,14 +114,7 @@ public:
   float uniform() { return static_cast<float>(next() >> 40) * (1.0F / 16777216.0F); }
 
 private:
-  static std::uint64_t mix(std::uint64_t z)
-  {
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-
-  std::uint64_t state_;
+  SplitMix64 random_;
   std::uint64_t spare_ = 0;
   int spare_count_ = 0;
 };
