@@ -195,6 +195,8 @@ int run(const Options& o)
   std::vector<std::string> unknown;
   gvf::PipelineConfig config = gvf::pipelineConfigFromParams(grid, detector, projection, fusion, &unknown);
   config.max_tf_wait = o.max_tf_wait;
+  std::vector<std::string> ignored = config.fusion.perFrameOptionsIgnored();
+  unknown.insert(unknown.end(), ignored.begin(), ignored.end());
   for (const std::string& warning : unknown)
   {
     std::cerr << "run_pipeline: warning: " << warning << "\n";

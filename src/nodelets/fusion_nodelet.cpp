@@ -96,6 +96,10 @@ void FusionNodelet::onInit()
   {
     NODELET_WARN("fusion: %s", warning.c_str());
   }
+  for (const std::string& warning : stage_->params().perFrameOptionsIgnored())
+  {
+    NODELET_WARN("fusion: %s", warning.c_str());
+  }
   const FusionParams& params = stage_->params();
   const bool approximate_sync = params.approximate_sync;
 
@@ -195,7 +199,6 @@ void FusionNodelet::reconfigureCb(FusionReconfigureConfig& reconfigure, uint32_t
   FusionConfig updated = stage_->config();
   updated.band_above = reconfigure.band_above;
   updated.band_below = reconfigure.band_below;
-  updated.min_points = reconfigure.min_points;
   try
   {
     stage_->setConfig(updated);

@@ -192,4 +192,29 @@ FusionParams FusionParams::fromParams(const ParamSource& source, std::vector<std
   return p;
 }
 
+std::vector<std::string> FusionParams::perFrameOptionsIgnored() const
+{
+  std::vector<std::string> warnings;
+  if (!tracking)
+  {
+    return warnings;
+  }
+  const FusionConfig defaults;
+  const auto ignored = [&](const std::string& key, const std::string& value)
+  {
+    warnings.push_back("~" + key + " is " + value +
+                       ", but it only acts on the per-frame verdict of ~tracking: false (the paper's mode); "
+                       "with tracking the track's motion model decides, and it is not used");
+  };
+  if (fusion.min_points != defaults.min_points)
+  {
+    ignored("min_points", std::to_string(fusion.min_points));
+  }
+  if (fusion.tie_rule != defaults.tie_rule)
+  {
+    ignored("tie_rule", toString(fusion.tie_rule));
+  }
+  return warnings;
+}
+
 }  // namespace grid_vision_fusion

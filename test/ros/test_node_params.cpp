@@ -180,11 +180,26 @@ void expectReconfigureMatchesTable(const std::string& file, std::size_t expected
   }
 }
 
+TEST(NodeParams, ThePerFrameVerdictsOptionsAreCalledIgnoredWithTracking)
+{
+  FusionParams params;
+  EXPECT_TRUE(params.perFrameOptionsIgnored().empty());  // defaults
+  params.fusion.min_points = 3;
+  params.fusion.tie_rule = TieRule::kUnknown;
+  const std::vector<std::string> warnings = params.perFrameOptionsIgnored();
+  ASSERT_EQ(warnings.size(), 2U);
+  EXPECT_NE(warnings[0].find("~min_points is 3"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("~tracking: false"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[1].find("~tie_rule is unknown"), std::string::npos) << warnings[1];
+  params.tracking = false;  // the paper's mode: they decide the verdict
+  EXPECT_TRUE(params.perFrameOptionsIgnored().empty());
+}
+
 TEST(NodeParams, TheReconfigureDefaultsAreTheStructDefaults)
 {
   expectReconfigureMatchesTable<DynamicGridParams>("DynamicGridReconfigure.cfg", 4);
   expectReconfigureMatchesTable<DetectorParams>("YoloDetectorReconfigure.cfg", 2);
-  expectReconfigureMatchesTable<FusionParams>("FusionReconfigure.cfg", 3);
+  expectReconfigureMatchesTable<FusionParams>("FusionReconfigure.cfg", 2);
 }
 
 TEST(NodeParams, OneScoreThresholdForBothDetectorBackends)

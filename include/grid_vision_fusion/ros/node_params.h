@@ -308,6 +308,11 @@ struct FusionParams
 
   /// @throws std::invalid_argument naming the parameter at fault.
   static FusionParams fromParams(const ParamSource& source, std::vector<std::string>* unknown = nullptr);
+
+  /// A warning for each option of the paper's per-frame verdict (~min_points, ~tie_rule) set away
+  /// from its default while ~tracking is on: the track's motion model decides then, and the option
+  /// changes nothing.
+  std::vector<std::string> perFrameOptionsIgnored() const;
 };
 
 template <typename Visitor>
