@@ -33,15 +33,14 @@ namespace grid_vision_fusion
 /// callbacks of the projection and the fusion queued behind it, frames at a time. On a thread of
 /// its own the long work is preempted by the kernel instead, and at nice +10 (kNiceIncrement) it
 /// yields the cores to those callbacks whenever they can run and takes what is left. At rate 15
-/// (scripts/soak.sh, doc/reliability.md) the p99 latency from a frame's arrival to its objects was
-/// 0.11-0.14 s on the manager's queue, 0.10-0.13 s on a thread of its own at the same priority,
-/// and 0.065-0.091 s at nice +10, against 0.054-0.069 s at rate 1.
+/// (scripts/soak.sh) the p99 latency from a frame's arrival to its objects went from 0.12-0.14 s
+/// to 0.04-0.09 s, against 0.05-0.07 s at rate 1 (doc/decisions/0026-stage-threads.md).
 ///
-/// `work(newest, replaced)` runs for each input taken, one call at a time, on the slot's thread (an
-/// exception it throws is logged and the input dropped);
-/// `replaced` is the newest input dropped since the previous call (absent when none was), for a
-/// filter that must know the input went on while it was busy. The owner calls end() (or destroys
-/// the slot) before the members its work uses are gone.
+/// `work(newest, replaced)` runs for each input taken, one call at a time, on the slot's thread;
+/// an exception it throws is logged and its input dropped. `replaced` is the newest input dropped
+/// since the previous call (absent when none was), for a filter that must know the input went on
+/// while it was busy. The owner calls end() (or destroys the slot) before the members its work
+/// uses are gone.
 template <typename Input>
 class NewestSlot
 {
