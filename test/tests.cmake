@@ -63,7 +63,8 @@ gvf_gtest(test_tools
   DEFINITIONS BAG_SUMMARY="$<TARGET_FILE:bag_summary>" RUN_PIPELINE="$<TARGET_FILE:run_pipeline>"
     KITTI_TO_BAG="$<TARGET_FILE:kitti_to_bag>" EVALUATE="$<TARGET_FILE:evaluate>"
     MAKE_SYNTHETIC_DRIVE="$<TARGET_FILE:make_synthetic_drive>" DETECT="$<TARGET_FILE:detect>"
-  DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive detect)
+    LATENCY_PROBE="$<TARGET_FILE:latency_probe>"
+  DEPENDS bag_summary run_pipeline kitti_to_bag evaluate make_synthetic_drive detect latency_probe)
 
 gvf_rostest(test_latency_probe LAUNCH test/tools/latency_probe.test SOURCES test/tools/test_latency_probe.cpp
   DEPENDS latency_probe)

@@ -9,14 +9,12 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
-#include <utility>
 #include <vector>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
@@ -106,36 +104,6 @@ TEST(LatencyProbe, WritesEachFramesLatencyToItsObjectsAndLeavesItEmptyWithout)
   EXPECT_EQ(rows[1][0], "100100000000");
   EXPECT_EQ(rows[1][2], "");
   fs::remove(csv);
-}
-/// Exit status and output (stdout and stderr) of `arguments` given to the probe.
-std::pair<int, std::string> runProbe(const std::string& arguments)
-{
-  std::string output;
-  FILE* pipe = popen((std::string(LATENCY_PROBE) + " " + arguments + " 2>&1").c_str(), "r");
-  char buffer[512];
-  while (pipe != nullptr && std::fgets(buffer, sizeof(buffer), pipe) != nullptr)
-  {
-    output += buffer;
-  }
-  const int status = pipe == nullptr ? -1 : pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-TEST(LatencyProbe, NamesTheOptionOrTheFileAtFault)
-{
-  const auto [unwritable_status, unwritable] = runProbe("--output /nonexistent_gvf_dir/latencies.csv");
-  EXPECT_EQ(unwritable_status, 1);
-  EXPECT_NE(unwritable.find("cannot write --output /nonexistent_gvf_dir/latencies.csv"), std::string::npos)
-      << unwritable;
-  const auto [missing_status, missing] = runProbe("--output x.csv --objects");
-  EXPECT_EQ(missing_status, 1);
-  EXPECT_NE(missing.find("missing the value of --objects"), std::string::npos) << missing;
-  const auto [unknown_status, unknown] = runProbe("--outptu x.csv");
-  EXPECT_EQ(unknown_status, 1);
-  EXPECT_NE(unknown.find("unknown option --outptu"), std::string::npos) << unknown;
-  const auto [none_status, none] = runProbe("");
-  EXPECT_EQ(none_status, 1);
-  EXPECT_NE(none.find("give --output"), std::string::npos) << none;
 }
 }  // namespace
 

@@ -351,4 +351,23 @@ TEST_F(ToolErrors, BagSummaryNamesABagWithoutObjects)
   EXPECT_FALSE(fs::exists(work_ / "frames"));
 }
 
+TEST(LatencyProbeErrors, NamesTheOptionOrTheFileAtFault)
+{
+  const std::string probe = LATENCY_PROBE;
+  const Result unwritable = run(probe + " --output /nonexistent_gvf_dir/latencies.csv");
+  EXPECT_EQ(WEXITSTATUS(unwritable.status), 1) << unwritable.output;
+  EXPECT_NE(unwritable.output.find("cannot write --output /nonexistent_gvf_dir/latencies.csv"),
+            std::string::npos)
+      << unwritable.output;
+  const Result missing = run(probe + " --output x.csv --objects");
+  EXPECT_EQ(WEXITSTATUS(missing.status), 1) << missing.output;
+  EXPECT_NE(missing.output.find("missing the value of --objects"), std::string::npos) << missing.output;
+  const Result unknown = run(probe + " --outptu x.csv");
+  EXPECT_EQ(WEXITSTATUS(unknown.status), 1) << unknown.output;
+  EXPECT_NE(unknown.output.find("unknown option --outptu"), std::string::npos) << unknown.output;
+  const Result none = run(probe);
+  EXPECT_EQ(WEXITSTATUS(none.status), 1) << none.output;
+  EXPECT_NE(none.output.find("give --output"), std::string::npos) << none.output;
+}
+
 }  // namespace
