@@ -37,7 +37,7 @@ gvf_gtest(test_evaluation
   SOURCES test/evaluation/test_evaluation.cpp test/evaluation/test_evaluation_report.cpp
     test/evaluation/test_kitti_ground_truth.cpp test/evaluation/test_tracking_evaluation.cpp
     test/evaluation/test_tracking_labels.cpp
-  LINK grid_vision_fusion_evaluation
+  LINK grid_vision_fusion_evaluation nlohmann_json::nlohmann_json
   DEFINITIONS GVF_EVALUATE_TOOL="$<TARGET_FILE:evaluate>"
   DEPENDS evaluate)
 gvf_gtest(test_simulation

@@ -3,10 +3,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -19,6 +22,8 @@ namespace grid_vision_fusion
 namespace
 {
 namespace fs = std::filesystem;
+/// Objects keep their keys in the order written, as metrics.json always had them.
+using Json = nlohmann::ordered_json;
 
 const cv::Size kPlotSize(640, 480);
 const cv::Rect kPlotArea(70, 50, 540, 360);
@@ -34,64 +39,35 @@ std::string number(double value, int decimals = 6)
   return text;
 }
 
-std::string jsonString(const std::string& text)
+/// `value` as the report's text gives it (`decimals` places) and a JSON reader reads it back:
+/// the figures keep the precision they always had in metrics.json. Null when not finite.
+Json jsonNumber(double value, int decimals = 6)
 {
-  std::string out = "\"";
-  for (char c : text)
-  {
-    switch (c)
-    {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20)
-        {
-          char escaped[8];
-          std::snprintf(escaped, sizeof(escaped), "\\u%04x", c);
-          out += escaped;
-        }
-        else
-        {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
+  return std::isfinite(value) ? Json(std::strtod(number(value, decimals).c_str(), nullptr)) : Json(nullptr);
 }
 
-std::string jsonArray(const std::vector<double>& values)
+Json jsonArray(const std::vector<double>& values)
 {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i)
+  Json out = Json::array();
+  for (double value : values)
   {
-    out += (i ? ", " : "") + number(values[i]);
+    out.push_back(jsonNumber(value));
   }
-  return out + "]";
+  return out;
 }
 
-std::string jsonStats(const ErrorStats& s)
+Json jsonStats(const ErrorStats& s)
 {
-  return "{\"count\": " + std::to_string(s.count) + ", \"median\": " + number(s.median) +
-         ", \"mean\": " + number(s.mean) + ", \"p90\": " + number(s.p90) + "}";
+  return {{"count", s.count},
+          {"median", jsonNumber(s.median)},
+          {"mean", jsonNumber(s.mean)},
+          {"p90", jsonNumber(s.p90)}};
 }
 
 /// Seconds for a report table: "never" when infinite.
 std::string seconds(double value)
 {
   return std::isfinite(value) ? number(value, 1) : "never";
-}
-
-/// A JSON number, null when not finite (an object never reported dynamic).
-std::string jsonNumber(double value)
-{
-  return std::isfinite(value) ? number(value) : "null";
 }
 
 /// The classes of `latencies`, sorted, with "all" first.
@@ -107,47 +83,116 @@ std::vector<std::string> latencyClasses(const std::vector<DynamicLatency>& laten
   return classes;
 }
 
-std::string jsonLatency(const std::vector<DynamicLatency>& latencies)
+/// Per class ("all" first) the time to the first dynamic verdict; null where not finite (an
+/// object never reported dynamic).
+Json jsonLatency(const std::vector<DynamicLatency>& latencies)
 {
-  std::string out = "{";
+  Json out = Json::object();
   for (const std::string& label : latencyClasses(latencies))
   {
     const LatencyStats s = latencyStats(latencies, label);
-    out += (label.empty() ? "" : ", ") + jsonString(label.empty() ? "all" : label) +
-           ": {\"count\": " + std::to_string(s.count) + ", \"median_s\": " + jsonNumber(s.median_s) +
-           ", \"p90_s\": " + jsonNumber(s.p90_s) + ", \"worst_s\": " + jsonNumber(s.worst_s) +
-           ", \"never\": " + std::to_string(s.never) + "}";
+    out[label.empty() ? "all" : label] = {{"count", s.count},
+                                          {"median_s", jsonNumber(s.median_s)},
+                                          {"p90_s", jsonNumber(s.p90_s)},
+                                          {"worst_s", jsonNumber(s.worst_s)},
+                                          {"never", s.never}};
   }
-  out += "}, \"dynamic_latency_tracks\": [";
-  for (std::size_t i = 0; i < latencies.size(); ++i)
-  {
-    const DynamicLatency& l = latencies[i];
-    out += std::string(i ? ", " : "") + "{\"label\": " + jsonString(l.label) +
-           ", \"track_id\": " + std::to_string(l.track_id) +
-           ", \"latency_s\": " + (l.latency_s >= 0.0 ? number(l.latency_s) : std::string("null")) + "}";
-  }
-  return out + "]";
+  return out;
 }
 
-std::string jsonCalibration(const ProbabilityCalibration& c)
+/// Every moving object's latency; null when it was never reported dynamic.
+Json jsonLatencyTracks(const std::vector<DynamicLatency>& latencies)
 {
-  std::ostringstream out;
-  out << "{\"matches\": " << c.total << ", \"brier\": " << number(c.brier)
-      << ", \"expected_calibration_error\": " << number(c.expected_calibration_error) << ", \"bins\": [";
+  Json out = Json::array();
+  for (const DynamicLatency& l : latencies)
+  {
+    out.push_back({{"label", l.label},
+                   {"track_id", l.track_id},
+                   {"latency_s", l.latency_s >= 0.0 ? jsonNumber(l.latency_s) : Json(nullptr)}});
+  }
+  return out;
+}
+
+Json jsonCalibration(const ProbabilityCalibration& c)
+{
+  Json bins = Json::array();
   for (std::size_t b = 0; b < ProbabilityCalibration::kBins; ++b)
   {
-    out << (b ? ", " : "") << "{\"low\": " << number(0.1 * static_cast<double>(b), 1)
-        << ", \"high\": " << number(0.1 * static_cast<double>(b + 1), 1) << ", \"count\": " << c.count[b]
-        << ", \"dynamic\": " << c.dynamic[b] << ", \"mean_p\": " << number(c.mean_p[b]) << "}";
+    bins.push_back({{"low", jsonNumber(0.1 * static_cast<double>(b), 1)},
+                    {"high", jsonNumber(0.1 * static_cast<double>(b + 1), 1)},
+                    {"count", c.count[b]},
+                    {"dynamic", c.dynamic[b]},
+                    {"mean_p", jsonNumber(c.mean_p[b])}});
   }
-  out << "]}";
-  return out.str();
+  return {{"matches", c.total},
+          {"brier", jsonNumber(c.brier)},
+          {"expected_calibration_error", jsonNumber(c.expected_calibration_error)},
+          {"bins", bins}};
 }
 
-std::string jsonCounts(const MotionCounts& counts)
+Json jsonClass(const ClassMetrics& m)
 {
-  return "[" + std::to_string(counts[0]) + ", " + std::to_string(counts[1]) + ", " +
-         std::to_string(counts[2]) + "]";
+  return {{"name", m.name},
+          {"ground_truth", m.ground_truth},
+          {"detections", m.detections},
+          {"true_positives", m.true_positives},
+          {"false_positives", m.false_positives},
+          {"precision", jsonNumber(m.precision)},
+          {"recall", jsonNumber(m.recall)},
+          {"f1", jsonNumber(m.f1)},
+          {"ap", jsonNumber(m.average_precision)},
+          {"ignored_difficult", m.ignored_difficult},
+          {"ignored_beyond_range", m.ignored_beyond_range},
+          {"ignored_dont_care", m.ignored_dont_care},
+          {"left_out_beyond_range", m.left_out_beyond_range},
+          {"recall_curve", jsonArray(m.recall_curve)},
+          {"precision_curve", jsonArray(m.precision_curve)}};
+}
+
+/// Per object class: the motion confusion and the predicted-motion counts per truth speed band.
+Json jsonMotionByClass(const EvaluationResult& result)
+{
+  Json out = Json::object();
+  for (const auto& [label, confusion] : result.motion_confusion_by_class)
+  {
+    Json bands_json = Json::object();
+    const auto bands = result.motion_by_class_and_band.find(label);
+    if (bands != result.motion_by_class_and_band.end())
+    {
+      for (const auto& [band, counts] : bands->second)
+      {
+        bands_json[toString(band)] = counts;
+      }
+    }
+    out[label] = {{"confusion", confusion}, {"by_truth_speed_band", bands_json}};
+  }
+  return out;
+}
+
+Json jsonTracking(const TrackingMetrics& t)
+{
+  return {{"ground_truth", t.ground_truth},
+          {"matches", t.matches},
+          {"false_positives", t.false_positives},
+          {"misses", t.misses},
+          {"id_switches", t.id_switches},
+          {"fragmentations", t.fragmentations},
+          {"mota", jsonNumber(t.mota)},
+          {"id_switches_per_100", jsonNumber(t.id_switches_per_100)},
+          {"truth_tracks", t.truth_tracks},
+          {"mostly_tracked", t.mostly_tracked},
+          {"mostly_lost", t.mostly_lost},
+          {"idtp", t.idtp},
+          {"idfp", t.idfp},
+          {"idfn", t.idfn},
+          {"idf1", jsonNumber(t.idf1)},
+          {"idp", jsonNumber(t.idp)},
+          {"idr", jsonNumber(t.idr)},
+          {"motion_changes", t.motion_changes},
+          {"motion_flickers", t.motion_flickers},
+          {"flickering_tracks", t.flickering_tracks},
+          {"dynamic_latency", jsonLatency(t.dynamic_latency)},
+          {"dynamic_latency_tracks", jsonLatencyTracks(t.dynamic_latency)}};
 }
 
 /// A number for a CSV field: empty when not finite.
@@ -286,76 +331,31 @@ void notCountedMarkdown(std::ostream& out, const EvaluationResult& result, const
 
 std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config)
 {
-  std::ostringstream out;
-  out << "{\n  \"config\": {\"iou_threshold\": " << number(config.iou_threshold)
-      << ", \"max_longitudinal_m\": " << number(config.max_longitudinal_m)
-      << ", \"motion_classes\": " << (config.motion_classes ? "true" : "false") << "},\n";
-  out << "  \"mAP\": " << number(result.mean_average_precision) << ",\n  \"classes\": [";
-  for (std::size_t i = 0; i < result.classes.size(); ++i)
+  Json out = {{"config",
+               {{"iou_threshold", jsonNumber(config.iou_threshold)},
+                {"max_longitudinal_m", jsonNumber(config.max_longitudinal_m)},
+                {"motion_classes", config.motion_classes}}},
+              {"mAP", jsonNumber(result.mean_average_precision)}};
+  Json classes = Json::array();
+  for (const ClassMetrics& m : result.classes)
   {
-    const ClassMetrics& m = result.classes[i];
-    out << (i ? "," : "") << "\n    {\"name\": " << jsonString(m.name)
-        << ", \"ground_truth\": " << m.ground_truth << ", \"detections\": " << m.detections
-        << ", \"true_positives\": " << m.true_positives << ", \"false_positives\": " << m.false_positives
-        << ", \"precision\": " << number(m.precision) << ", \"recall\": " << number(m.recall)
-        << ", \"f1\": " << number(m.f1) << ", \"ap\": " << number(m.average_precision)
-        << ",\n     \"ignored_difficult\": " << m.ignored_difficult
-        << ", \"ignored_beyond_range\": " << m.ignored_beyond_range
-        << ", \"ignored_dont_care\": " << m.ignored_dont_care
-        << ", \"left_out_beyond_range\": " << m.left_out_beyond_range
-        << ",\n     \"recall_curve\": " << jsonArray(m.recall_curve)
-        << ",\n     \"precision_curve\": " << jsonArray(m.precision_curve) << "}";
+    classes.push_back(jsonClass(m));
   }
-  out << "\n  ],\n  \"motion_confusion\": {\"rows\": \"truth\", \"columns\": \"predicted\", "
-         "\"labels\": [\"unknown\", \"static\", \"dynamic\"], \"counts\": [";
-  for (std::size_t t = 0; t < 3; ++t)
-  {
-    out << (t ? ", " : "") << "[" << result.motion_confusion[t][0] << ", " << result.motion_confusion[t][1]
-        << ", " << result.motion_confusion[t][2] << "]";
-  }
-  out << "]},\n  \"motion_by_class\": {";
-  // Per class: the confusion matrix, and the predicted-motion counts per truth speed band.
-  std::size_t class_index = 0;
-  for (const auto& [label, confusion] : result.motion_confusion_by_class)
-  {
-    out << (class_index++ ? "," : "") << "\n    " << jsonString(label) << ": {\"confusion\": [";
-    for (std::size_t t = 0; t < 3; ++t)
-    {
-      out << (t ? ", " : "") << jsonCounts(confusion[t]);
-    }
-    out << "], \"by_truth_speed_band\": {";
-    const auto bands = result.motion_by_class_and_band.find(label);
-    if (bands != result.motion_by_class_and_band.end())
-    {
-      std::size_t band_index = 0;
-      for (const auto& [band, counts] : bands->second)
-      {
-        out << (band_index++ ? ", " : "") << jsonString(toString(band)) << ": " << jsonCounts(counts);
-      }
-    }
-    out << "}}";
-  }
-  out << (class_index ? "\n  " : "") << "},\n  \"position_error_m\": " << jsonStats(result.position_error_m)
-      << ",\n  \"speed_error_mps\": " << jsonStats(result.speed_error_mps)
-      << ",\n  \"heading_error_rad\": " << jsonStats(result.heading_error_rad)
-      << ",\n  \"p_dynamic_calibration\": " << jsonCalibration(result.p_dynamic_calibration);
+  out["classes"] = classes;
+  out["motion_confusion"] = {{"rows", "truth"},
+                             {"columns", "predicted"},
+                             {"labels", {"unknown", "static", "dynamic"}},
+                             {"counts", result.motion_confusion}};
+  out["motion_by_class"] = jsonMotionByClass(result);
+  out["position_error_m"] = jsonStats(result.position_error_m);
+  out["speed_error_mps"] = jsonStats(result.speed_error_mps);
+  out["heading_error_rad"] = jsonStats(result.heading_error_rad);
+  out["p_dynamic_calibration"] = jsonCalibration(result.p_dynamic_calibration);
   if (result.tracking)
   {
-    const TrackingMetrics& t = *result.tracking;
-    out << ",\n  \"tracking\": {\"ground_truth\": " << t.ground_truth << ", \"matches\": " << t.matches
-        << ", \"false_positives\": " << t.false_positives << ", \"misses\": " << t.misses
-        << ", \"id_switches\": " << t.id_switches << ", \"fragmentations\": " << t.fragmentations
-        << ", \"mota\": " << number(t.mota) << ", \"id_switches_per_100\": " << number(t.id_switches_per_100)
-        << ",\n    \"truth_tracks\": " << t.truth_tracks << ", \"mostly_tracked\": " << t.mostly_tracked
-        << ", \"mostly_lost\": " << t.mostly_lost << ", \"idtp\": " << t.idtp << ", \"idfp\": " << t.idfp
-        << ", \"idfn\": " << t.idfn << ", \"idf1\": " << number(t.idf1) << ", \"idp\": " << number(t.idp)
-        << ", \"idr\": " << number(t.idr) << ",\n    \"motion_changes\": " << t.motion_changes
-        << ", \"motion_flickers\": " << t.motion_flickers
-        << ", \"flickering_tracks\": " << t.flickering_tracks
-        << ",\n    \"dynamic_latency\": " << jsonLatency(t.dynamic_latency) << "}";
+    out["tracking"] = jsonTracking(*result.tracking);
   }
-  out << "\n}\n";
-  return out.str();
+  return out.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 std::string reportMarkdown(const EvaluationResult& result, const EvaluationConfig& config)

@@ -1,6 +1,7 @@
 // Tests of the evaluation outputs: JSON, Markdown tables, Cartucho folders and plots.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -10,6 +11,8 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "grid_vision_fusion/evaluation/evaluation_report.h"
 
@@ -57,21 +60,52 @@ struct Case
 TEST(EvaluationReport, JsonCarriesTheFigures)
 {
   const Case c;
-  const std::string json = metricsJson(c.result, c.config);
-  EXPECT_NE(json.find("\"mAP\": 0.500000"), std::string::npos) << json;  // dynamicCar 1, staticCar 0
-  EXPECT_NE(
-      json.find("{\"name\": \"dynamicCar\", \"ground_truth\": 1, \"detections\": 2, \"true_positives\": 1, "
-                "\"false_positives\": 1, \"precision\": 0.500000, \"recall\": 1.000000"),
-      std::string::npos)
-      << json;
-  EXPECT_NE(json.find("\"counts\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]]"), std::string::npos) << json;
+  const std::string text = metricsJson(c.result, c.config);
+  const nlohmann::json json = nlohmann::json::parse(text);
+  EXPECT_EQ(json["mAP"], 0.5) << text;  // dynamicCar 1, staticCar 0
+  const nlohmann::json& dynamic_car = json["classes"][0];
+  EXPECT_EQ(dynamic_car["name"], "dynamicCar");
+  EXPECT_EQ(dynamic_car["ground_truth"], 1);
+  EXPECT_EQ(dynamic_car["detections"], 2);
+  EXPECT_EQ(dynamic_car["true_positives"], 1);
+  EXPECT_EQ(dynamic_car["false_positives"], 1);
+  EXPECT_EQ(dynamic_car["precision"], 0.5);
+  EXPECT_EQ(dynamic_car["recall"], 1.0);
+  const nlohmann::json counts = {{0, 0, 0}, {0, 0, 1}, {0, 0, 1}};
+  EXPECT_EQ(json["motion_confusion"]["counts"], counts) << text;
   // Per class: the confusion and the counts per truth speed band (no state here: moving ones
   // fall in the band "unknown").
-  EXPECT_NE(
-      json.find("\"motion_by_class\": {\n    \"car\": {\"confusion\": [[0, 0, 0], [0, 0, 1], [0, 0, 1]], "
-                "\"by_truth_speed_band\": {\"static\": [0, 0, 1], \"unknown\": [0, 0, 1]}}\n  },"),
-      std::string::npos)
-      << json;
+  const nlohmann::json by_class = {
+      {"car",
+       {{"confusion", counts}, {"by_truth_speed_band", {{"static", {0, 0, 1}}, {"unknown", {0, 0, 1}}}}}}};
+  EXPECT_EQ(json["motion_by_class"], by_class) << text;
+}
+
+TEST(EvaluationReport, JsonKeepsItsKeysInOrderAndItsFiguresToSixDecimals)
+{
+  const Case c;
+  const std::string text = metricsJson(c.result, c.config);
+  std::vector<std::string> keys;
+  const nlohmann::ordered_json json = nlohmann::ordered_json::parse(text);
+  for (const auto& entry : json.items())
+  {
+    keys.push_back(entry.key());
+  }
+  const std::vector<std::string> expected{"config",
+                                          "mAP",
+                                          "classes",
+                                          "motion_confusion",
+                                          "motion_by_class",
+                                          "position_error_m",
+                                          "speed_error_mps",
+                                          "heading_error_rad",
+                                          "p_dynamic_calibration"};
+  EXPECT_EQ(keys, expected);
+  EvaluationResult result = c.result;
+  result.mean_average_precision = 2.0 / 3.0;
+  EXPECT_EQ(nlohmann::json::parse(metricsJson(result, c.config))["mAP"], 0.666667);
+  result.position_error_m.median = std::nan("");
+  EXPECT_TRUE(nlohmann::json::parse(metricsJson(result, c.config))["position_error_m"]["median"].is_null());
 }
 
 TEST(EvaluationReport, MatchesCsv)
@@ -145,12 +179,12 @@ TEST(EvaluationReport, CalibrationInTheReportWhenTheDetectionsHaveAProbability)
   const std::string md = reportMarkdown(result, EvaluationConfig{});
   EXPECT_NE(md.find("## P(dynamic) calibration"), std::string::npos) << md;
   EXPECT_NE(md.find("| 0.8-0.9 | 1 | 0.820 | 100.0 |"), std::string::npos) << md;
-  const std::string json = metricsJson(result, EvaluationConfig{});
-  EXPECT_NE(json.find("\"p_dynamic_calibration\": {\"matches\": 1, \"brier\": 0.032400"), std::string::npos)
-      << json;
-  EXPECT_NE(json.find("{\"low\": 0.8, \"high\": 0.9, \"count\": 1, \"dynamic\": 1, \"mean_p\": 0.820000}"),
-            std::string::npos)
-      << json;
+  const nlohmann::json calibration =
+      nlohmann::json::parse(metricsJson(result, EvaluationConfig{}))["p_dynamic_calibration"];
+  EXPECT_EQ(calibration["matches"], 1);
+  EXPECT_EQ(calibration["brier"], 0.0324);
+  const nlohmann::json bin = {{"low", 0.8}, {"high", 0.9}, {"count", 1}, {"dynamic", 1}, {"mean_p", 0.82}};
+  EXPECT_EQ(calibration["bins"][8], bin);
 
   det.p_dynamic = -1.0;  // a label file: no probability, no section
   result = evaluate({gt}, {det}, EvaluationConfig{});

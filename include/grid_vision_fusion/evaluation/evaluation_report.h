@@ -13,7 +13,9 @@ namespace grid_vision_fusion
 {
 /// The result as JSON: per class figures and curves, mAP, confusion matrix, per object class the
 /// confusion matrix and the predicted-motion counts per truth speed band ("motion_by_class"),
-/// error statistics.
+/// error statistics, the P(dynamic) calibration and, with tracking figures, "tracking". Written
+/// by nlohmann/json, indented by 2, the keys in this order; every figure rounded to 6 decimals
+/// as before (the calibration bins' limits to 1), null where it is not finite.
 std::string metricsJson(const EvaluationResult& result, const EvaluationConfig& config);
 
 /// Every matched object of the motion confusion as CSV, one line each after the header
