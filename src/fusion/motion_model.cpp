@@ -1,4 +1,5 @@
 #include "grid_vision_fusion/fusion/motion_model.h"
+#include "grid_vision_fusion/fusion/model_constants.h"
 
 #include <Eigen/Dense>
 
@@ -21,14 +22,6 @@ void requireRange(const char* name, double value, double low, double high)
     throw std::invalid_argument(msg.str());
   }
 }
-
-/// The smallest variance of the grid's velocity [m²/s²]: a cell whose particles all agree still
-/// knows its velocity only to about 0.1 m/s.
-constexpr double kMinGridVariance = 0.01;
-
-/// The smallest dynamic share by which the grid's velocity noise is divided: cells with almost no
-/// dynamic mass still say a little about the velocity.
-constexpr double kMinVelocityShare = 0.05;
 
 /// Log of exp(a) + exp(b) without overflow.
 double logAdd(double a, double b)
@@ -58,6 +51,19 @@ double posterior(double prior_dynamic, double log_l_static, double log_l_dynamic
   const double log_s = std::log(std::max(1.0 - prior_dynamic, 1e-300)) + log_l_static;
   const double log_d = std::log(std::max(prior_dynamic, 1e-300)) + log_l_dynamic;
   return std::exp(log_d - logAdd(log_s, log_d));
+}
+
+/// The Kalman update of the state `x` with covariance `p` by a measurement of its components
+/// [first, first + 2) (the measurement matrix picks them): `innovation` is the measurement minus
+/// those components, `innovation_cov` its covariance (theirs plus the measurement noise).
+template <int N>
+void kalmanUpdate(Eigen::Matrix<double, N, 1>& x, Eigen::Matrix<double, N, N>& p, int first,
+                  const Eigen::Vector2d& innovation, const Eigen::Matrix2d& innovation_cov)
+{
+  const Eigen::Matrix<double, N, 2> gain = p.template middleCols<2>(first) * innovation_cov.inverse();
+  x += gain * innovation;
+  p -= gain * p.template middleRows<2>(first);
+  p = 0.5 * (p + p.transpose());
 }
 }  // namespace
 
@@ -97,8 +103,6 @@ void MotionModel::start(const Eigen::Vector2d& position, double p_dynamic)
   moving_.tail<2>().setZero();
   restartMoving(position);
   mu_dynamic_ = std::clamp(p_dynamic, 0.0, 1.0);
-  grid_log_ratio_ = 0.0;
-  registration_log_ratio_ = 0.0;
 }
 
 void MotionModel::restartAt(const Eigen::Vector2d& position)
@@ -134,9 +138,14 @@ void MotionModel::predict(double dt)
   {
     return;
   }
-  // Mixing (IMM step 1): the probability that the mode was i given that it is j now, then each
-  // model's starting point as the mixture of both. S enters D with the prior velocity.
-  const double p_switch = 1.0 - std::exp(-dt / config_.switch_time);
+  mix(1.0 - std::exp(-dt / config_.switch_time));
+  predictModels(dt);
+}
+
+void MotionModel::mix(double p_switch)
+{
+  // The probability that the mode was i given that it is j now, then each model's starting point
+  // as the mixture of both. S enters D with the prior velocity.
   const double mu_s = 1.0 - mu_dynamic_;
   const double mu_d = mu_dynamic_;
   const double c_s = mu_s * (1.0 - p_switch) + mu_d * p_switch;
@@ -163,10 +172,16 @@ void MotionModel::predict(double dt)
   const Eigen::Vector4d e_d = moving_ - d0;
   const Eigen::Matrix4d d0_cov =
       w_sd * (from_standing_cov + e_s * e_s.transpose()) + w_dd * (moving_cov_ + e_d * e_d.transpose());
-
-  // Prediction (IMM step 2): S stands; D moves at constant velocity with white acceleration.
   standing_ = s0;
   standing_cov_ = s0_cov;
+  moving_ = d0;
+  moving_cov_ = d0_cov;
+  mu_dynamic_ = c_d;
+}
+
+void MotionModel::predictModels(double dt)
+{
+  // S stands; D moves at constant velocity with white acceleration.
   Eigen::Matrix4d f = Eigen::Matrix4d::Identity();
   f(0, 2) = dt;
   f(1, 3) = dt;
@@ -178,11 +193,8 @@ void MotionModel::predict(double dt)
     noise(axis, axis + 2) = noise(axis + 2, axis) = q * dt * dt * dt / 2.0;
     noise(axis + 2, axis + 2) = q * dt * dt;
   }
-  moving_ = f * d0;
-  moving_cov_ = f * d0_cov * f.transpose() + noise;
-  mu_dynamic_ = c_d;
-  grid_log_ratio_ = 0.0;
-  registration_log_ratio_ = 0.0;
+  moving_ = f * moving_;
+  moving_cov_ = f * moving_cov_ * f.transpose() + noise;
 }
 
 void MotionModel::update(const Eigen::Vector2d& position)
@@ -193,57 +205,48 @@ void MotionModel::update(const Eigen::Vector2d& position)
 void MotionModel::update(const Eigen::Vector2d& position, const Eigen::Matrix2d& extra_noise)
 {
   const Eigen::Matrix2d r = positionNoise() + extra_noise;
-  // Likelihoods (IMM step 3), then each model's Kalman update.
+  // The centre's likelihood under each model moves the mode probability (IMM step 3), then each
+  // model's Kalman update.
   const Eigen::Vector2d nu_s = position - standing_;
   const Eigen::Matrix2d s_s = standing_cov_ + r;
   const Eigen::Vector2d nu_d = position - moving_.head<2>();
   const Eigen::Matrix2d s_d = moving_cov_.topLeftCorner<2, 2>() + r;
   mu_dynamic_ = posterior(mu_dynamic_, logCauchy2(nu_s, s_s), logCauchy2(nu_d, s_d));
-
-  const Eigen::Matrix2d k_s = standing_cov_ * s_s.inverse();
-  standing_ += k_s * nu_s;
-  standing_cov_ -= k_s * standing_cov_;
-  standing_cov_ = 0.5 * (standing_cov_ + standing_cov_.transpose());
-  const Eigen::Matrix<double, 4, 2> k_d = moving_cov_.leftCols<2>() * s_d.inverse();
-  moving_ += k_d * nu_d;
-  moving_cov_ -= k_d * moving_cov_.topRows<2>();
-  moving_cov_ = 0.5 * (moving_cov_ + moving_cov_.transpose());
+  kalmanUpdate(standing_, standing_cov_, 0, nu_s, s_s);
+  kalmanUpdate(moving_, moving_cov_, 0, nu_d, s_d);
 }
 
-void MotionModel::updateGrid(const GridMotionEvidence& grid)
+double MotionModel::updateGrid(const GridMotionEvidence& grid)
 {
   const double share = std::isfinite(grid.dynamic_share) ? std::clamp(grid.dynamic_share, 0.0, 1.0) : 0.5;
-  grid_log_ratio_ = voteLogRatio(share, config_.grid_error);
+  double log_ratio = voteLogRatio(share, config_.grid_error);
   if (!grid.has_velocity || !grid.velocity.allFinite() || !grid.velocity_variance.allFinite())
   {
-    return;
+    return log_ratio;
   }
   const Eigen::Matrix2d spread = grid.velocity_variance.cwiseMax(kMinGridVariance).asDiagonal();
   const Eigen::Vector2d nu = grid.velocity - moving_.tail<2>();
   const Eigen::Matrix2d predicted = moving_cov_.bottomRightCorner<2, 2>();
-  grid_log_ratio_ += logCauchy2(nu, spread + predicted) - logCauchy2(grid.velocity, spread);
+  log_ratio += logCauchy2(nu, spread + predicted) - logCauchy2(grid.velocity, spread);
   // The cells' velocity as a measurement of the constant-velocity model's: the less of their
   // mass is dynamic, the less it says.
   const Eigen::Matrix2d noise = spread / std::max(share, kMinVelocityShare);
-  const Eigen::Matrix2d s = predicted + noise;
-  const Eigen::Matrix<double, 4, 2> k = moving_cov_.rightCols<2>() * s.inverse();
-  moving_ += k * nu;
-  moving_cov_ -= k * moving_cov_.bottomRows<2>();
-  moving_cov_ = 0.5 * (moving_cov_ + moving_cov_.transpose());
+  kalmanUpdate(moving_, moving_cov_, 2, nu, predicted + noise);
+  return log_ratio;
 }
 
-void MotionModel::updateRegistration(const std::vector<Eigen::Vector2d>& then,
-                                     const std::vector<Eigen::Vector2d>& now, double cell_size, double dt,
-                                     const Eigen::Matrix2d& unseen)
+double MotionModel::registrationEvidence(const std::vector<Eigen::Vector2d>& then,
+                                         const std::vector<Eigen::Vector2d>& now, double cell_size, double dt,
+                                         const Eigen::Matrix2d& unseen) const
 {
   const double ratio =
       registrationLogRatio(then, now, cell_size, dt, movingVelocity(), movingVelocityCovariance(), unseen);
-  registration_log_ratio_ = errs(ratio, config_.grid_error);
+  return errs(ratio, config_.grid_error);
 }
 
-double MotionModel::pDynamic() const
+double MotionModel::pDynamic(const MotionEvidence& evidence) const
 {
-  return posterior(mu_dynamic_, 0.0, grid_log_ratio_ + registration_log_ratio_);
+  return posterior(mu_dynamic_, 0.0, evidence.grid + evidence.registration);
 }
 
 Eigen::Vector4d MotionModel::state() const

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "grid_vision_fusion/fusion/model_constants.h"
+
 namespace grid_vision_fusion
 {
 namespace
@@ -16,20 +18,6 @@ namespace
 constexpr double kMinEdgeDistanceM = 0.05;  // closeness criterion: nearer points count as this near
 constexpr double kCoarseStepRad = M_PI / 20.0;
 constexpr double kFineStepRad = M_PI / 180.0;
-/// A cell counts fully up to this fraction of the box height below the bottom edge, then less
-/// (Gaussian with this fraction as σ). A trained detector's bottom edge lies 3 % of the height
-/// too high on average and errs by 3.5 % (σ, heavy-tailed; YOLOv5s on KITTI,
-/// doc/detector_noise.md): at 5 % the object's own cells, seen below such an edge, lost to the
-/// wall or kerb behind it (with the calibrated noise, 1.5 points of moving objects found dynamic
-/// on the scenario suite).
-constexpr double kBelowToleranceFraction = 0.1;
-/// The same above the bottom edge: the object's ground cells project near its bottom edge, the
-/// cells of what stands behind it higher.
-constexpr double kAboveToleranceFraction = 0.1;
-/// The root-mean-square error of a trained detector's bottom edge as a fraction of the box height:
-/// its bias (0.032) and its spread (σ 0.035) together, YOLOv5s on KITTI (doc/detector_noise.md).
-/// The nearest cell of the object's cluster projects onto the bottom edge up to this error.
-constexpr double kBottomEdgeErrorFraction = 0.047;
 
 /// The extent of the points (x[i], y[i]) (non-empty) along the axes a = (c, s) and b = (−s, c)
 /// of a rectangle, and their mean along each.
@@ -231,6 +219,87 @@ CentreEstimate centreOfCells(const std::vector<double>& cx, const std::vector<do
   return estimate;
 }
 
+/// The bottom edge of a detection box and how far from it an image row lies, in the tolerances
+/// of kBelowToleranceFraction, kAboveToleranceFraction and kBottomEdgeErrorFraction of the box's
+/// height.
+struct BottomEdge
+{
+  explicit BottomEdge(const BoundingBox& box)
+      : y_max(box.y_max),
+        height(std::max(static_cast<double>(box.height()), 1.0)),
+        below_px(kBelowToleranceFraction * height),
+        above_px(kAboveToleranceFraction * height)
+  {
+  }
+  /// How far row `v` lies below the edge beyond the tolerance, in units of the tolerance.
+  double belowBeyondTolerance(double v) const { return std::max(v - y_max - below_px, 0.0) / below_px; }
+  /// How far row `v` lies above the edge beyond the tolerance, in units of the tolerance.
+  double aboveBeyondTolerance(double v) const { return std::max(y_max - v - above_px, 0.0) / above_px; }
+  /// How far row `v` lies above the edge, in units of the edge's error.
+  double aboveInEdgeErrors(double v) const
+  {
+    return std::max(y_max - v, 0.0) / (kBottomEdgeErrorFraction * height);
+  }
+
+  double y_max;
+  double height;
+  double below_px;
+  double above_px;
+};
+
+/// Scores within this of each other are a tie, broken by the lowest row (objectCluster()).
+constexpr double kScoreTie = 1e-9;
+
+/// How well one cluster of a fusion band fits the detection (higher is better).
+struct ClusterScore
+{
+  double value = 0.0;
+  float lowest_row = 0.F;  ///< the image row of its lowest cell: its nearest to the camera
+
+  /// Whether this score wins over `other`: higher by more than kScoreTie, or tied and lower in
+  /// the image (nearer).
+  bool beats(const ClusterScore& other) const
+  {
+    return value > other.value + kScoreTie ||
+           (std::abs(value - other.value) <= kScoreTie && lowest_row > other.lowest_row);
+  }
+};
+
+/// What objectCluster() counts of one cluster of a fusion band, cell by cell.
+struct ClusterTally
+{
+  double near_edge = 0.0;  ///< its cells, each weighted by how near its row lies to the bottom edge
+  float lowest_row = -std::numeric_limits<float>::infinity();
+  std::size_t cells = 0;
+  std::size_t expected_cells = 0;  ///< of them, near a cell the detection's track expects
+
+  /// Counts a cell at image row `v`, near a cell the track expects or not.
+  void add(float v, const BottomEdge& edge, bool expected)
+  {
+    const double below = edge.belowBeyondTolerance(v);
+    const double above = edge.aboveBeyondTolerance(v);
+    near_edge += std::exp(-below * below - above * above);
+    lowest_row = std::max(lowest_row, v);
+    ++cells;
+    expected_cells += expected ? 1 : 0;
+  }
+
+  /// The product of three factors: the cells near the bottom edge; up to twice that for a
+  /// cluster that continues the track's (the share of its cells near an expected one); and how
+  /// well its nearest cell meets the edge, the ground contact of the object's nearest part: a
+  /// cluster whose nearest cell lies well above it stands behind the object (a wall behind a
+  /// pedestrian), one whose nearest cell lies well below it stands in front.
+  ClusterScore score(const BottomEdge& edge) const
+  {
+    double value = near_edge;
+    value *= 1.0 + static_cast<double>(expected_cells) / static_cast<double>(cells);
+    const double behind = edge.aboveInEdgeErrors(lowest_row);
+    const double in_front = edge.belowBeyondTolerance(lowest_row);
+    value *= std::exp(-0.5 * behind * behind - in_front * in_front);
+    return {value, lowest_row};
+  }
+};
+
 }  // namespace
 
 void CentreConfig::validate() const
@@ -324,51 +393,26 @@ std::vector<std::uint32_t> objectCluster(const ProjectedPointsView& points,
 
   // The object's cluster: the most cells near the bottom edge, its nearest cell at the edge.
   const std::vector<std::size_t> label = clusterPoints(xs, ys, cluster_distance);
-  const double box_height = std::max(static_cast<double>(box.height()), 1.0);
-  const double below_px = kBelowToleranceFraction * box_height;
-  const double above_px = kAboveToleranceFraction * box_height;
-  std::map<std::size_t, std::pair<double, float>> score_of;              // label -> (score, lowest row)
-  std::map<std::size_t, std::pair<std::size_t, std::size_t>> continued;  // label -> (cells, expected ones)
+  const BottomEdge edge(box);
+  std::map<std::size_t, ClusterTally> tallies;  // cluster label → its tally
   const double near2 = cluster_distance * cluster_distance;
-  // How far a row lies below the bottom edge beyond the margin, in units of the margin.
-  auto beyond_margin_below = [&](double v) { return std::max(v - box.y_max - below_px, 0.0) / below_px; };
   for (std::size_t k = 0; k < n; ++k)
   {
-    const float v = points.v[members[k]];
-    const double below = beyond_margin_below(v);
-    const double above = std::max(box.y_max - static_cast<double>(v) - above_px, 0.0) / above_px;
-    auto& [score, lowest] =
-        score_of.try_emplace(label[k], 0.0, -std::numeric_limits<float>::infinity()).first->second;
-    score += std::exp(-below * below - above * above);
-    lowest = std::max(lowest, v);
-    auto& [cells, expected_cells] = continued[label[k]];
-    ++cells;
     const Eigen::Vector2d cell(xs[k], ys[k]);
-    expected_cells +=
+    tallies[label[k]].add(
+        points.v[members[k]], edge,
         std::any_of(expected.begin(), expected.end(),
-                    [&](const Eigen::Vector2d& e) { return (e - cell).squaredNorm() <= near2; });
+                    [&](const Eigen::Vector2d& e) { return (e - cell).squaredNorm() <= near2; }));
   }
-  for (auto& [l, entry] : score_of)
+  std::size_t chosen = tallies.begin()->first;
+  ClusterScore best = tallies.begin()->second.score(edge);
+  for (const auto& [l, tally] : tallies)
   {
-    auto& [score, lowest] = entry;
-    const auto& [cells, expected_cells] = continued.at(l);
-    score *= 1.0 + static_cast<double>(expected_cells) / static_cast<double>(cells);
-    // The bottom edge is the ground contact of the object's nearest part: a cluster whose nearest
-    // cell lies well above it stands behind the object (a wall behind a pedestrian), one whose
-    // nearest cell lies well below it stands in front.
-    const double behind =
-        std::max(box.y_max - static_cast<double>(lowest), 0.0) / (kBottomEdgeErrorFraction * box_height);
-    const double in_front = beyond_margin_below(lowest);
-    score *= std::exp(-0.5 * behind * behind - in_front * in_front);
-  }
-  std::size_t chosen = score_of.begin()->first;
-  for (const auto& [l, entry] : score_of)
-  {
-    const auto& best = score_of.at(chosen);
-    if (entry.first > best.first + 1e-9 ||
-        (std::abs(entry.first - best.first) <= 1e-9 && entry.second > best.second))
+    const ClusterScore score = tally.score(edge);
+    if (score.beats(best))
     {
       chosen = l;
+      best = score;
     }
   }
   std::vector<std::uint32_t> cluster;

@@ -4,16 +4,12 @@
 #include <cmath>
 #include <utility>
 
+#include "grid_vision_fusion/fusion/model_constants.h"
+
 namespace grid_vision_fusion
 {
 namespace
 {
-/// A box edge this close to the image's left or right edge [px] cuts the object.
-constexpr float kTruncationMarginPx = 1.F;
-/// The same as a share of the image width, for a trained detector whose box edges stop a few
-/// pixels short of the image's (YOLOv5s at 640 px on KITTI's 1242 px: up to 7 px, 0.6 %).
-constexpr float kTruncationMargin = 0.01F;
-
 /// Whether the lidar hit the cell of point `i` in the grid's scan (every point, where the view does
 /// not say).
 bool isHit(const ProjectedPointsView& points, std::size_t i)

@@ -1,4 +1,5 @@
 #include "grid_vision_fusion/fusion/scan_registration.h"
+#include "grid_vision_fusion/fusion/model_constants.h"
 
 #include <Eigen/Dense>
 
@@ -20,17 +21,16 @@ public:
   {
   }
 
-  /// At most 1 (a lattice cell much larger than the spread); 0 beyond kNegligible standard
-  /// deviations, where it is below exp(−kNegligible² / 2) of the peak's.
+  /// At most 1 (a lattice cell much larger than the spread); 0 beyond kNegligibleSigmas standard
+  /// deviations.
   double mass(const Eigen::Vector2d& shift) const
   {
     const Eigen::Vector2d d = shift - mean_;
     const double d2 = d.dot(information_ * d);
-    return d2 > kNegligible * kNegligible ? 0.0 : std::min(1.0, scale_ * std::exp(-0.5 * d2));
+    return d2 > kNegligibleSigmas * kNegligibleSigmas ? 0.0 : std::min(1.0, scale_ * std::exp(-0.5 * d2));
   }
 
 private:
-  static constexpr double kNegligible = 8.0;
   Eigen::Vector2d mean_;
   Eigen::Matrix2d information_;
   double scale_;
@@ -117,7 +117,7 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
   const LatticeNormal moving_shift(velocity * dt, dt * dt * velocity_cov + blur, area);
   // Σ_t P(t | mode) · exp(overlap(t) − max overlap): shifts without an overlap weigh
   // exp(−max overlap) each, i.e. that times the mass of the whole lattice (1) ...
-  const double floor = std::exp(-static_cast<double>(votes.maxOverlap()));
+  const double floor = std::exp(-kNatsPerHit * static_cast<double>(votes.maxOverlap()));
   double standing = floor;
   double moving = floor;
   // ... plus, for each shift with an overlap, its mass times the rest of its weight.
@@ -129,7 +129,8 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
         const double moving_mass = moving_shift.mass(shift);
         if (standing_mass > 0.0 || moving_mass > 0.0)
         {
-          const double extra = std::exp(static_cast<double>(count - votes.maxOverlap())) - floor;
+          const double extra =
+              std::exp(kNatsPerHit * static_cast<double>(count - votes.maxOverlap())) - floor;
           standing += standing_mass * extra;
           moving += moving_mass * extra;
         }
@@ -141,9 +142,8 @@ double registrationLogRatio(const ShiftVotes& votes, double dt, const Eigen::Vec
 double registrationReach(double cell_size, double dt, const Eigen::Vector2d& velocity,
                          const Eigen::Matrix2d& velocity_cov, const Eigen::Matrix2d& unseen)
 {
-  // Shifts beyond these weigh less than exp(−12.5) of their mode's peak.
-  return dt * (velocity.norm() + 5.0 * std::sqrt(velocity_cov.trace())) + 5.0 * std::sqrt(unseen.trace()) +
-         5.0 * cell_size;
+  return dt * (velocity.norm() + kReachSigmas * std::sqrt(velocity_cov.trace())) +
+         kReachSigmas * std::sqrt(unseen.trace()) + kReachCells * cell_size;
 }
 
 double registrationLogRatio(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "grid_vision_fusion/fusion/assignment.h"
+#include "grid_vision_fusion/fusion/model_constants.h"
 
 namespace grid_vision_fusion
 {
@@ -24,12 +25,6 @@ void requirePositive(const char* name, double value)
     throw std::invalid_argument(msg.str());
   }
 }
-
-/// How far back the lidar hits of a track's objects are registered [s]: three scans at 10 Hz,
-/// in which an object at 1 m/s moves 1.5 cells of 0.2 m (doc/nodelets/fusion.md, "Motion model").
-constexpr double kRegistrationSpan = 0.3;
-/// Slack on that span for stamps that jitter [s].
-constexpr double kRegistrationSlack = 0.02;
 
 /// Drops from `hits` (oldest first, each with a `stamp` [s]) those older than the registration's
 /// span before `stamp_s` [s].
@@ -265,7 +260,7 @@ TrackEstimate Tracker::estimateOf(const Track& track) const
   e.id = track.id;
   e.label = majorityLabel(track);
   e.class_id = track.label_classes.at(e.label);
-  e.p_dynamic = track.motion.pDynamic();
+  e.p_dynamic = track.motion.pDynamic(track.evidence);
   e.motion = e.p_dynamic > 0.5 ? Motion::kDynamic : e.p_dynamic < 0.5 ? Motion::kStatic : Motion::kUnknown;
   const Eigen::Vector4d state = track.motion.state();
   e.x = state(0);
@@ -295,6 +290,7 @@ std::vector<TrackEstimate> Tracker::update(double stamp_s, const std::vector<Tra
   for (Track& track : tracks_)
   {
     track.motion.predict(dt);
+    track.evidence = MotionEvidence();  // the last image's
   }
   dropBeforeSpan(scene_hits_, stamp_s);  // before new tracks take their hits of the scans before
   const std::vector<std::size_t> match = associate(observations);
@@ -420,7 +416,7 @@ void Tracker::updateMotion(Track& track, const TrackObservation& obs) const
     // A box cut by the image edge: along the object's length its centre follows the visible part.
     track.motion.update(centre, cutNoise(obs));
   }
-  track.motion.updateGrid(obs.grid);
+  track.evidence.grid = track.motion.updateGrid(obs.grid);
   registerHits(track, obs);
   track.cells = obs.cells;
   ++track.centres;
@@ -429,7 +425,7 @@ void Tracker::updateMotion(Track& track, const TrackObservation& obs) const
 void Tracker::locate(Track& track, const TrackObservation& obs) const
 {
   track.motion.start(Eigen::Vector2d(obs.x, obs.y), 0.5);
-  track.motion.updateGrid(obs.grid);
+  track.evidence.grid = track.motion.updateGrid(obs.grid);
   // A new object's hits are in the scans before its first image, if the lidar saw it: its first
   // hits register against them. A track whose boxes came without cells first was in the camera's
   // view but not in the lidar's (hidden from it by an occluder, or beyond its reach): the scans
@@ -452,8 +448,8 @@ void Tracker::registerHits(Track& track, const TrackObservation& obs) const
     // A cut box's hits are those the image still shows: a window that slides along the object's
     // length, over which they say nothing (cutNoise(), as for its centre).
     const ObservedHits& then = track.recent_hits.front();
-    track.motion.updateRegistration(then.cells, obs.hits, obs.cell_size, last_stamp_ - then.stamp,
-                                    cutNoise(obs));
+    track.evidence.registration = track.motion.registrationEvidence(then.cells, obs.hits, obs.cell_size,
+                                                                    last_stamp_ - then.stamp, cutNoise(obs));
   }
   track.recent_hits.push_back({last_stamp_, obs.hits});
 }

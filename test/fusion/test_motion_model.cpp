@@ -122,8 +122,9 @@ TEST(MotionModel, TheGridsShareMovesTheProbability)
   MotionModel model;
   auto with = [&](double dynamic_share)
   {
-    model.updateGrid(share(dynamic_share));
-    return model.pDynamic();
+    MotionEvidence evidence;
+    evidence.grid = model.updateGrid(share(dynamic_share));
+    return model.pDynamic(evidence);
   };
   model.start(Eigen::Vector2d(10.0, 0.0), 0.5);
   EXPECT_DOUBLE_EQ(with(0.5), 0.5) << "a share of one half says nothing";
@@ -132,13 +133,14 @@ TEST(MotionModel, TheGridsShareMovesTheProbability)
   EXPECT_GT(with(0.8), with(0.6));
   EXPECT_DOUBLE_EQ(with(std::nan("")), 0.5);
   // The grid's word adds to the centres': a standing object stays static where its cells lean
-  // dynamic a little; each image's grid evidence counts for that image only.
+  // dynamic a little.
   for (int k = 0; k < 20; ++k)
   {
     model.predict(kDt);
     model.update(Eigen::Vector2d(10.0, 0.0));
   }
-  EXPECT_DOUBLE_EQ(model.pDynamic(), model.modeProbability()) << "no grid evidence since the prediction";
+  EXPECT_DOUBLE_EQ(model.pDynamic(MotionEvidence()), model.modeProbability())
+      << "no evidence besides the centres";
   EXPECT_LT(with(0.7), 0.5);
 }
 
@@ -154,14 +156,12 @@ TEST(MotionModel, TheGridsVelocityCountsByItsSpread)
   grid.has_velocity = true;
   grid.velocity = Eigen::Vector2d(4.0, 0.0);
   grid.velocity_variance = Eigen::Vector2d(0.25, 0.25);
-  model.updateGrid(grid);
-  EXPECT_GT(model.pDynamic(), 0.7);
+  EXPECT_GT(model.pDynamic({model.updateGrid(grid), 0.0}), 0.7);
   EXPECT_NEAR(model.movingVelocity().x(), 4.0, 0.3);
   MotionModel scattered;
   scattered.start(Eigen::Vector2d(10.0, 0.0), 0.5);
   grid.velocity_variance = Eigen::Vector2d(25.0, 25.0);
-  scattered.updateGrid(grid);
-  EXPECT_LT(std::abs(scattered.pDynamic() - 0.5), 0.2);
+  EXPECT_LT(std::abs(scattered.pDynamic({scattered.updateGrid(grid), 0.0}) - 0.5), 0.2);
   EXPECT_LT(scattered.movingVelocity().x(), 1.0);
 }
 
@@ -176,7 +176,7 @@ TEST(MotionModel, AGridVelocityIsJudgedBeforeItIsTakenIn)
   {
     model.predict(kDt);
     model.update(Eigen::Vector2d(20.0, -5.0));
-    model.updateGrid(share(0.1));
+    (void)model.updateGrid(share(0.1));
   }
   model.predict(kDt);
   model.update(Eigen::Vector2d(20.0, -5.0));
@@ -184,8 +184,7 @@ TEST(MotionModel, AGridVelocityIsJudgedBeforeItIsTakenIn)
   smear.has_velocity = true;
   smear.velocity = Eigen::Vector2d(-3.0, 0.0);
   smear.velocity_variance = Eigen::Vector2d(4.0, 4.0);
-  model.updateGrid(smear);
-  EXPECT_LT(model.pDynamic(), 0.5);
+  EXPECT_LT(model.pDynamic({model.updateGrid(smear), 0.0}), 0.5);
   EXPECT_LT(model.movingVelocity().x(), -0.1) << "the velocity is taken in";
 }
 

@@ -159,14 +159,16 @@ TEST(MotionModel, OneRegistrationMovesTheOddsAtMostByTheGridsErrorRate)
     config.grid_error = error;
     MotionModel moves(config);
     moves.start(Eigen::Vector2d(10.5, 2.9), 0.5);
-    moves.updateRegistration(carCorner(10), carCorner(10, 7, 0), kCell, 0.3);
-    EXPECT_LE(moves.pDynamic(), 1.0 - error);
-    EXPECT_GT(moves.pDynamic(), 1.0 - error - 0.01);
+    const double p_moves =
+        moves.pDynamic({0.0, moves.registrationEvidence(carCorner(10), carCorner(10, 7, 0), kCell, 0.3)});
+    EXPECT_LE(p_moves, 1.0 - error);
+    EXPECT_GT(p_moves, 1.0 - error - 0.01);
     MotionModel stays(config);
     stays.start(Eigen::Vector2d(10.5, 2.9), 0.5);
-    stays.updateRegistration(carCorner(10), carCorner(10), kCell, 0.3);
-    EXPECT_GE(stays.pDynamic(), error);
-    EXPECT_LT(stays.pDynamic(), error + 0.01);
+    const double p_stays =
+        stays.pDynamic({0.0, stays.registrationEvidence(carCorner(10), carCorner(10), kCell, 0.3)});
+    EXPECT_GE(p_stays, error);
+    EXPECT_LT(p_stays, error + 0.01);
   }
 }
 
@@ -188,15 +190,16 @@ TEST(MotionModel, TheHitsRegistrationKeepsARevealedStandingObjectStatic)
     {
       model.predict(0.1);
       model.update(Eigen::Vector2d(10.5 + 0.3 * k, 2.9));
-      model.updateGrid(static_cells);
+      MotionEvidence evidence;
+      evidence.grid = model.updateGrid(static_cells);
       hits.push_back(carCorner(2 + 3 * k));
       if (registration)
       {
         const std::size_t then = hits.size() >= 4 ? hits.size() - 4 : 0;
-        model.updateRegistration(hits[then], hits.back(), kCell,
-                                 0.1 * static_cast<double>(hits.size() - 1 - then));
+        evidence.registration = model.registrationEvidence(hits[then], hits.back(), kCell,
+                                                           0.1 * static_cast<double>(hits.size() - 1 - then));
       }
-      p = std::max(p, model.pDynamic());
+      p = std::max(p, model.pDynamic(evidence));
     }
     return p;
   };
@@ -212,6 +215,7 @@ TEST(MotionModel, TheHitsRegistrationConfirmsAMover)
   with.start(Eigen::Vector2d(10.5, 2.9), 0.5);
   without.start(Eigen::Vector2d(10.5, 2.9), 0.5);
   std::vector<std::vector<Eigen::Vector2d>> hits{carCorner(10)};
+  MotionEvidence evidence;
   for (int k = 1; k <= 4; ++k)
   {
     for (MotionModel* model : {&with, &without})
@@ -221,14 +225,12 @@ TEST(MotionModel, TheHitsRegistrationConfirmsAMover)
     }
     hits.push_back(carCorner(10, k, 0));
     const std::size_t then = hits.size() >= 4 ? hits.size() - 4 : 0;
-    with.updateRegistration(hits[then], hits.back(), kCell,
-                            0.1 * static_cast<double>(hits.size() - 1 - then));
+    evidence.registration = with.registrationEvidence(hits[then], hits.back(), kCell,
+                                                      0.1 * static_cast<double>(hits.size() - 1 - then));
   }
-  EXPECT_GT(with.pDynamic(), 0.9);
-  EXPECT_GT(with.pDynamic(), without.pDynamic());
-  // The evidence holds for one image: the next predict() forgets it.
-  with.predict(0.1);
-  EXPECT_DOUBLE_EQ(with.pDynamic(), with.modeProbability());
+  EXPECT_GT(with.pDynamic(evidence), 0.9);
+  EXPECT_GT(with.pDynamic(evidence), without.pDynamic(MotionEvidence()));
+  EXPECT_DOUBLE_EQ(with.pDynamic(MotionEvidence()), with.modeProbability());
 }
 
 }  // namespace grid_vision_fusion

@@ -186,6 +186,32 @@ TEST(Tracker, AnObjectWithoutEvidenceIsUnknown)
   EXPECT_EQ(e.motion, Motion::kUnknown);
 }
 
+TEST(Tracker, TheGridsWordCountsForItsImageOnly)
+{
+  // Two trackers see the same standing object; in image 3 the grid of one of them says
+  // "dynamic" (its share only: no velocity that would move the filter). That image's P(dynamic)
+  // differs; in image 4 the object's box has no cells in both (no new word of the grid), and the
+  // two agree exactly: the evidence of image 3 is not carried on.
+  Tracker plain;
+  Tracker told;
+  TrackObservation neutral = observe("car", 10.0, 0.0, 300.F);
+  neutral.grid = GridMotionEvidence{};  // share 0.5: no word
+  TrackObservation dynamic_share = neutral;
+  dynamic_share.grid.dynamic_share = 0.95;
+  TrackObservation without_cells = neutral;
+  without_cells.supported = false;
+  std::vector<double> p_plain;
+  std::vector<double> p_told;
+  for (int k = 0; k < 5; ++k)
+  {
+    const TrackObservation& same = k == 4 ? without_cells : neutral;
+    p_plain.push_back(plain.update(k * kFramePeriodS, {same})[0].p_dynamic);
+    p_told.push_back(told.update(k * kFramePeriodS, {k == 3 ? dynamic_share : same})[0].p_dynamic);
+  }
+  EXPECT_GT(p_told[3], p_plain[3] + 0.1);
+  EXPECT_DOUBLE_EQ(p_told[4], p_plain[4]);
+}
+
 TEST(Tracker, CrossingPedestriansKeepTheirIds)
 {
   // Two pedestrians cross each other 0.8 m apart in depth at 1.5 m/s in opposite directions;

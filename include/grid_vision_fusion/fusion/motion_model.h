@@ -15,21 +15,24 @@
 // likelihood is a bivariate Student-t with ν = 1 (Cauchy) of scale position_sigma — the frame-to-
 // frame steps of the centres of standing objects fit ν = 1 best (doc/nodelets/fusion.md).
 //
-// The grid speaks about the same object through its own filter, which already integrates over
-// time: its evidence enters the published probability once, at the image, instead of being
-// accumulated image after image (which would count the same grid belief again and again):
-//   - the dynamic share r̄ of the object's cells (mean of P(D) / (P(S) + P(D))), read as a vote
-//     that errs with probability grid_error: L(D) : L(S) = (ε + (1 − 2ε) r̄) : (1 − ε − (1 − 2ε) r̄);
-//   - the cells' velocity ĝ with the spread of their particles Σ (the Mahalanobis test of Nuss et
-//     al., IJRR 2018, as a likelihood): t(ĝ; 0, Σ) under S, t(ĝ; v_D, Σ + P_v) under D, with D's
-//     velocity v_D and covariance P_v as predicted before this image; ĝ then updates v_D (noise
-//     Σ / r̄), so that a mover's particles start its velocity before its centres can.
-// The object's lidar hits speak once per image too: their registration against the track's hits
-// of a few scans before (scan_registration.h) gives a likelihood ratio of D against S that no
-// drift of the centre estimate enters. The hits are the grid's cells, and their vote errs like
-// the grid's: with probability grid_error (a cluster that holds another object's cells, a shape
-// that changes), so that one registration moves the odds by at most (1 − ε) / ε.
-// P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S), L the likelihoods of the grid and the hits.
+// Each image's evidence beyond the centre enters the published probability once, at that image,
+// instead of being accumulated image after image: the grid's own filter integrates over time
+// already, and the registrations of consecutive images share scans. The tracker holds it per
+// image (MotionEvidence); the filter's mode probability μ_D holds the centres' alone:
+//   - the grid: the dynamic share r̄ of the object's cells (mean of P(D) / (P(S) + P(D))), read as
+//     a vote that errs with probability grid_error: L(D) : L(S) = (ε + (1 − 2ε) r̄) : (1 − ε −
+//     (1 − 2ε) r̄); and the cells' velocity ĝ with the spread of their particles Σ (the
+//     Mahalanobis test of Nuss et al., IJRR 2018, as a likelihood): t(ĝ; 0, Σ) under S,
+//     t(ĝ; v_D, Σ + P_v) under D, with D's velocity v_D and covariance P_v after this image's
+//     centre and before ĝ; ĝ then updates v_D (noise Σ / r̄), so that a mover's particles start
+//     its velocity before its centres can (updateGrid());
+//   - the hits: their registration against the track's hits of a few scans before
+//     (scan_registration.h) gives a likelihood ratio of D against S that no drift of the centre
+//     estimate enters. The hits are the grid's cells, and their vote errs like the grid's: with
+//     probability grid_error (a cluster that holds another object's cells, a shape that changes),
+//     so that one registration moves the odds by at most (1 − ε) / ε (registrationEvidence()).
+// P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S), L the likelihoods of the grid and the hits
+// (pDynamic()). The constants the model does not expose as parameters are in motion_constants.h.
 #pragma once
 
 #include "grid_vision_fusion/fusion/scan_registration.h"
@@ -74,6 +77,14 @@ struct GridMotionEvidence
   bool has_velocity = false;
 };
 
+/// What one image says about an object's motion besides its centre: log-likelihood ratios of D
+/// against S. It counts for that image only.
+struct MotionEvidence
+{
+  double grid = 0.0;          ///< of the grid's cells (MotionModel::updateGrid())
+  double registration = 0.0;  ///< of the registration of its hits (MotionModel::registrationEvidence())
+};
+
 /// The interacting multiple model of one track. Copyable value type; not thread-safe.
 class MotionModel
 {
@@ -92,7 +103,7 @@ public:
   /// object's cells. The stationary model takes its estimate before the jump and `position` as
   /// equally likely: it moves halfway, and its covariance spans both.
   void restartAt(const Eigen::Vector2d& position);
-  /// Mixes the two models for a step of `dt` [s] (the mode may switch) and predicts both; dt <= 0
+  /// A step of `dt` [s]: mix() for the chance that the mode switched, then predictModels(); dt <= 0
   /// leaves the filter unchanged.
   void predict(double dt);
   /// Updates both models with the observed centre `position` [m] and the mode probability with
@@ -102,29 +113,27 @@ public:
   /// image edge: its centre is off along the object's length by up to the length it hides).
   void update(const Eigen::Vector2d& position, const Eigen::Matrix2d& extra_noise);
 
-  /// Takes in what the grid says about the object at this image: its likelihood ratio of D
-  /// against S (from the velocity the constant-velocity model predicted, before this image's
-  /// grid velocity), which pDynamic() applies, then the constant-velocity model's velocity is
-  /// updated with the grid's (noise: its spread over the dynamic share). The mode probability
-  /// itself does not change: the grid's own filter integrates over time already.
-  void updateGrid(const GridMotionEvidence& grid);
-  /// Takes in the registration of the object's lidar hits in an earlier scan `dt` [s] ago and in
-  /// this image's (scan_registration.h): its likelihood ratio of D against S, from the velocity the
-  /// constant-velocity model has now, as a vote that errs with probability grid_error, which
-  /// pDynamic() applies. Like the grid's, this evidence is not accumulated (the registrations of
-  /// consecutive images share scans).
-  /// The hits are in metres on the grid's lattice of step `cell_size` [m]; `unseen` [m²] is the
-  /// displacement they cannot show (registrationLogRatio()); no evidence without enough hits in
-  /// either scan, a lattice, or dt > 0.
-  void updateRegistration(const std::vector<Eigen::Vector2d>& then, const std::vector<Eigen::Vector2d>& now,
-                          double cell_size, double dt,
-                          const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero());
+  /// Takes in what the grid says about the object at this image and returns its log-likelihood
+  /// ratio of D against S (MotionEvidence::grid). The ratio is judged against the velocity the
+  /// constant-velocity model has before the grid's velocity enters (after this image's centre, when
+  /// update() came first), then that velocity is updated with the grid's (noise: its spread over
+  /// the dynamic share). The mode probability itself does not change: the grid's own filter
+  /// integrates over time already.
+  [[nodiscard]] double updateGrid(const GridMotionEvidence& grid);
+  /// The log-likelihood ratio of D against S (MotionEvidence::registration) of the registration of
+  /// the object's lidar hits in an earlier scan `dt` [s] ago and in this image's
+  /// (scan_registration.h), from the velocity the constant-velocity model has now, as a vote that
+  /// errs with probability grid_error. The hits are in metres on the grid's lattice of step
+  /// `cell_size` [m]; `unseen` [m²] is the displacement they cannot show
+  /// (registrationLogRatio()); 0 without enough hits in either scan, a lattice, or dt > 0.
+  double registrationEvidence(const std::vector<Eigen::Vector2d>& then,
+                              const std::vector<Eigen::Vector2d>& now, double cell_size, double dt,
+                              const Eigen::Matrix2d& unseen = Eigen::Matrix2d::Zero()) const;
 
   /// P(dynamic) of the centres alone (the filter's mode probability).
   double modeProbability() const { return mu_dynamic_; }
-  /// P(dynamic) with the grid's evidence and the hits' registration of the latest updateGrid()
-  /// and updateRegistration() since the last predict().
-  double pDynamic() const;
+  /// P(dynamic) with an image's evidence besides the centres.
+  double pDynamic(const MotionEvidence& evidence) const;
 
   /// The combined estimate (x, y, vx, vy) [m, m/s]: the models' means weighted by their
   /// probabilities (the stationary model's velocity is zero), and its covariance.
@@ -148,6 +157,12 @@ private:
   /// The constant-velocity model at `position` with the measurement's uncertainty, its velocity
   /// kept with the prior's uncertainty.
   void restartMoving(const Eigen::Vector2d& position);
+  /// IMM step 1: each model restarts from the mixture of both, weighted by the probability that
+  /// the mode was that model's given that it is this one's after a switch with probability
+  /// `p_switch`; the mode probability becomes the predicted one.
+  void mix(double p_switch);
+  /// IMM step 2: the stationary model stands, the constant-velocity model moves for `dt` [s].
+  void predictModels(double dt);
 
   MotionModelConfig config_;
   Eigen::Vector2d standing_ = Eigen::Vector2d::Zero();  ///< S: position
@@ -155,8 +170,6 @@ private:
   Eigen::Vector4d moving_ = Eigen::Vector4d::Zero();  ///< D: position, velocity
   Eigen::Matrix4d moving_cov_ = Eigen::Matrix4d::Identity();
   double mu_dynamic_ = 0.5;
-  double grid_log_ratio_ = 0.0;          ///< log L(D) − log L(S) of the grid at the latest image
-  double registration_log_ratio_ = 0.0;  ///< the same of the hits' registration
 };
 
 /// Log-density of a bivariate Student-t with ν = 1 (Cauchy) and scale matrix `scale` at

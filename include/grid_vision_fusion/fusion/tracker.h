@@ -207,6 +207,7 @@ private:
     std::map<std::string, double> label_votes;           ///< label → sum of its objects' scores
     std::map<std::string, std::uint32_t> label_classes;  ///< label → detector class index
     MotionModel motion;
+    MotionEvidence evidence;             ///< of its object in the latest image besides the centre
     BoundingBox box;                     ///< the detector's box in its last image
     BoxFilter box_filter;                ///< the filtered box
     std::vector<Eigen::Vector2d> cells;  ///< of its object's cluster in its last image
@@ -225,8 +226,9 @@ private:
   /// For every track, the observation it is paired with (kUnassigned: none): the gated pairs'
   /// optimal assignment (an observation without cells is admitted by its box alone).
   std::vector<std::size_t> associate(const std::vector<TrackObservation>& observations) const;
-  /// A matched track takes its observation: the centre (or a restart there), the grid's evidence,
-  /// the registration of its hits; an observation without cells only its box and label.
+  /// A matched track takes its observation: the centre (or a restart there), then the grid's
+  /// evidence, then the registration of its hits; an observation without cells only its box and
+  /// label.
   void updateTrack(Track& track, const TrackObservation& observation) const;
   /// The motion model of a track without a position of its own starts at `observation` (which
   /// has cells), with the hits of the scans before.
@@ -234,7 +236,7 @@ private:
   /// A located track takes an observation with cells into its motion model.
   void updateMotion(Track& track, const TrackObservation& observation) const;
   /// The registration of the observation's lidar hits against the track's oldest hits within
-  /// kRegistrationSpan, into the track's motion model; then the observation's hits join the
+  /// kRegistrationSpan (the track's evidence of this image); then the observation's hits join the
   /// track's.
   void registerHits(Track& track, const TrackObservation& observation) const;
   /// The hits of the earlier scans (scene_hits_) that the new track's first observation may have
@@ -256,7 +258,7 @@ private:
   /// What a box cut by the image edge adds to its centre's noise [m²]: the centre is the visible
   /// part's, off by up to half the object's length, in a direction the outline of a short visible
   /// part does not tell, and the edge sweeps along a standing object as fast as the camera moves:
-  /// offset min(half the length, camera speed × kCutSweepTime) in every direction (half the length
+  /// offset min(half the length, camera speed × kRegistrationSpan) in every direction (half the length
   /// when the camera's speed is not known). Zero for a box that is not cut.
   Eigen::Matrix2d cutNoise(const TrackObservation& observation) const;
 
