@@ -32,7 +32,7 @@
 //     probability grid_error (a cluster that holds another object's cells, a shape that changes),
 //     so that one registration moves the odds by at most (1 − ε) / ε (registrationEvidence()).
 // P(dynamic) = μ_D · L_D / (μ_D · L_D + μ_S · L_S), L the likelihoods of the grid and the hits
-// (pDynamic()). The constants the model does not expose as parameters are in motion_constants.h.
+// (pDynamic()). The constants the model does not expose as parameters are in model_constants.h.
 #pragma once
 
 #include "grid_vision_fusion/fusion/scan_registration.h"
