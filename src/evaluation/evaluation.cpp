@@ -7,9 +7,6 @@
 #include <numeric>
 #include <set>
 #include <stdexcept>
-#include <unordered_map>
-
-#include "grid_vision_fusion/fusion/assignment.h"
 
 namespace grid_vision_fusion
 {
@@ -30,37 +27,6 @@ double wrapAngle(double angle)
     angle += 2.0 * M_PI;
   }
   return angle - M_PI;
-}
-
-bool inRange(const EvalObject& object, double max_longitudinal_m)
-{
-  return object.longitudinal_m <= max_longitudinal_m;
-}
-
-/// The DontCare regions of each frame.
-using DontCareRegions = std::map<std::string, std::vector<BoundingBox>>;
-
-/// Whether `box` lies in a DontCare region of `frame`: intersection / area of `box` >= `overlap`
-/// ("+1 pixel" convention), as the KITTI devkit's boxoverlap(det, dontcare, "a").
-bool inDontCare(const DontCareRegions& regions, const std::string& frame, const BoundingBox& box,
-                double overlap)
-{
-  const auto found = regions.find(frame);
-  if (found == regions.end())
-  {
-    return false;
-  }
-  const double area = (box.x_max - box.x_min + 1.0) * (box.y_max - box.y_min + 1.0);
-  for (const BoundingBox& region : found->second)
-  {
-    const double iw = std::min(box.x_max, region.x_max) - std::max(box.x_min, region.x_min) + 1.0;
-    const double ih = std::min(box.y_max, region.y_max) - std::max(box.y_min, region.y_min) + 1.0;
-    if (iw > 0.0 && ih > 0.0 && area > 0.0 && iw * ih / area >= overlap)
-    {
-      return true;
-    }
-  }
-  return false;
 }
 
 /// Cartucho/mAP greedy matching of the detections `det_indices` (any order) against the
@@ -201,6 +167,32 @@ void countMatch(const Match& match, ClassMetrics& metrics)
   metrics.precision_curve.push_back(tp / static_cast<double>(metrics.detections));
 }
 }  // namespace
+
+bool inRange(const EvalObject& object, double max_longitudinal_m)
+{
+  return object.longitudinal_m <= max_longitudinal_m;
+}
+
+bool inDontCare(const DontCareRegions& regions, const std::string& frame, const BoundingBox& box,
+                double overlap)
+{
+  const auto found = regions.find(frame);
+  if (found == regions.end())
+  {
+    return false;
+  }
+  const double area = (box.x_max - box.x_min + 1.0) * (box.y_max - box.y_min + 1.0);
+  for (const BoundingBox& region : found->second)
+  {
+    const double iw = std::min(box.x_max, region.x_max) - std::max(box.x_min, region.x_min) + 1.0;
+    const double ih = std::min(box.y_max, region.y_max) - std::max(box.y_min, region.y_min) + 1.0;
+    if (iw > 0.0 && ih > 0.0 && area > 0.0 && iw * ih / area >= overlap)
+    {
+      return true;
+    }
+  }
+  return false;
+}
 
 void EvaluationConfig::validate() const
 {
@@ -617,372 +609,6 @@ ProbabilityCalibration probabilityCalibration(const std::vector<MatchedObject>& 
         n / static_cast<double>(c.total) * std::abs(c.mean_p[b] - static_cast<double>(c.dynamic[b]) / n);
   }
   return c;
-}
-
-void TrackingEvaluationConfig::validate() const
-{
-  if (!(iou_threshold > 0.0 && iou_threshold <= 1.0))
-  {
-    throw std::invalid_argument("iou_threshold must be in (0, 1], got " + std::to_string(iou_threshold));
-  }
-  if (!(max_longitudinal_m > 0.0))
-  {
-    throw std::invalid_argument("max_longitudinal_m must be > 0, got " + std::to_string(max_longitudinal_m));
-  }
-  if (!(flicker_window_s > 0.0))
-  {
-    throw std::invalid_argument("flicker_window_s must be > 0, got " + std::to_string(flicker_window_s));
-  }
-  if (!(latency_speed_mps > 0.0))
-  {
-    throw std::invalid_argument("latency_speed_mps must be > 0, got " + std::to_string(latency_speed_mps));
-  }
-}
-
-namespace
-{
-/// The state of one ground-truth identity while the frames go by.
-struct TruthTrackState
-{
-  bool ever_matched = false;
-  bool interrupted = false;         ///< unmatched in a frame since its last match
-  std::int64_t last_detection = 0;  ///< detection id of its last match
-  std::size_t frames = 0;
-  std::size_t matched_frames = 0;
-  // Motion stability.
-  bool has_motion = false;
-  Motion last_motion = Motion::kUnknown;
-  Motion last_truth = Motion::kUnknown;
-  bool has_change = false;
-  double last_change_s = 0.0;
-  bool flickered = false;
-  // Time to the first dynamic verdict.
-  bool moving_seen = false;     ///< matched once while moving at latency_speed_mps or more...
-  double moving_since_s = 0.0;  ///< ...at this time
-  bool dynamic_seen = false;    ///< reported dynamic at or after moving_since_s
-  double latency_s = -1.0;
-  std::string label;
-};
-
-/// Identities of `objects`: their track_id, or a fresh negative id (below −1) where it is −1.
-std::vector<std::int64_t> identities(const std::vector<EvalObject>& objects,
-                                     const std::vector<std::size_t>& indices)
-{
-  std::vector<std::int64_t> ids(objects.size(), -1);
-  std::int64_t next_anonymous = -2;
-  for (std::size_t i : indices)
-  {
-    ids[i] = objects[i].track_id >= 0 ? objects[i].track_id : next_anonymous--;
-  }
-  return ids;
-}
-}  // namespace
-
-TrackingMetrics evaluateTracking(const std::vector<EvalObject>& ground_truth,
-                                 const std::vector<EvalObject>& detections,
-                                 const TrackingEvaluationConfig& config)
-{
-  config.validate();
-  TrackingMetrics m;
-  // Frame -> objects (ground truth beyond the range limit is ignored below, as difficult) and
-  // DontCare regions, frames in name order (10-digit indices: time order).
-  std::map<std::string, std::vector<std::size_t>> gt_of, det_of;
-  std::vector<std::size_t> gt_all, det_all;
-  DontCareRegions dont_care;
-  for (std::size_t g = 0; g < ground_truth.size(); ++g)
-  {
-    if (ground_truth[g].dont_care)
-    {
-      dont_care[ground_truth[g].frame].push_back(ground_truth[g].box);
-      continue;
-    }
-    gt_of[ground_truth[g].frame].push_back(g);
-    gt_all.push_back(g);
-  }
-  for (std::size_t d = 0; d < detections.size(); ++d)
-  {
-    det_of[detections[d].frame].push_back(d);
-    det_all.push_back(d);
-  }
-  const std::vector<std::int64_t> gt_id = identities(ground_truth, gt_all);
-  const std::vector<std::int64_t> det_id = identities(detections, det_all);
-  std::set<std::string> frames;
-  for (const auto& entry : gt_of)
-  {
-    frames.insert(entry.first);
-  }
-  for (const auto& entry : det_of)
-  {
-    frames.insert(entry.first);
-  }
-
-  std::map<std::int64_t, TruthTrackState> truth_state;
-  std::map<std::pair<std::int64_t, std::int64_t>, std::size_t> co_matched;  // (gt id, det id) -> frames
-  std::map<std::int64_t, std::size_t> truth_frames, detection_frames;
-  auto qualifies = [&](std::size_t g, std::size_t d)
-  {
-    return ground_truth[g].label == detections[d].label &&
-           boxIou(ground_truth[g].box, detections[d].box) >= config.iou_threshold;
-  };
-  for (const std::string& frame : frames)
-  {
-    std::vector<std::size_t> truth, difficult;  // counted, ignored (difficult or beyond the range)
-    for (std::size_t g : gt_of[frame])
-    {
-      const bool ignored = ground_truth[g].difficult || !inRange(ground_truth[g], config.max_longitudinal_m);
-      (ignored ? difficult : truth).push_back(g);
-    }
-    const std::vector<std::size_t>& dets = det_of[frame];
-    std::vector<std::size_t> det_match(dets.size(), kUnassigned);  // index into truth
-    std::vector<std::size_t> truth_match(truth.size(), kUnassigned);
-    // Keep the previous correspondences that still qualify.
-    for (std::size_t i = 0; i < truth.size(); ++i)
-    {
-      const TruthTrackState& state = truth_state[gt_id[truth[i]]];
-      if (!state.ever_matched)
-      {
-        continue;
-      }
-      for (std::size_t j = 0; j < dets.size(); ++j)
-      {
-        if (det_match[j] == kUnassigned && det_id[dets[j]] == state.last_detection &&
-            qualifies(truth[i], dets[j]))
-        {
-          det_match[j] = i;
-          truth_match[i] = j;
-          break;
-        }
-      }
-    }
-    // The rest by the Hungarian method on 1 − IoU.
-    std::vector<std::size_t> free_truth, free_dets;
-    for (std::size_t i = 0; i < truth.size(); ++i)
-    {
-      if (truth_match[i] == kUnassigned)
-      {
-        free_truth.push_back(i);
-      }
-    }
-    for (std::size_t j = 0; j < dets.size(); ++j)
-    {
-      if (det_match[j] == kUnassigned)
-      {
-        free_dets.push_back(j);
-      }
-    }
-    CostMatrix cost(free_truth.size(), free_dets.size());
-    for (std::size_t a = 0; a < free_truth.size(); ++a)
-    {
-      for (std::size_t b = 0; b < free_dets.size(); ++b)
-      {
-        const std::size_t g = truth[free_truth[a]];
-        const std::size_t d = dets[free_dets[b]];
-        if (qualifies(g, d))
-        {
-          cost.at(a, b) = 1.0 - boxIou(ground_truth[g].box, detections[d].box);
-        }
-      }
-    }
-    const std::vector<std::size_t> assigned = solveAssignment(cost);
-    for (std::size_t a = 0; a < free_truth.size(); ++a)
-    {
-      if (assigned[a] != kUnassigned)
-      {
-        truth_match[free_truth[a]] = free_dets[assigned[a]];
-        det_match[free_dets[assigned[a]]] = free_truth[a];
-      }
-    }
-
-    // Unmatched detections that match ignored ground truth, lie beyond the range limit or in a
-    // DontCare region are ignored.
-    std::vector<bool> ignored(dets.size(), false);
-    for (std::size_t j = 0; j < dets.size(); ++j)
-    {
-      if (det_match[j] != kUnassigned)
-      {
-        continue;
-      }
-      const EvalObject& det = detections[dets[j]];
-      ignored[j] = !inRange(det, config.max_longitudinal_m) ||
-                   std::any_of(difficult.begin(), difficult.end(),
-                               [&](std::size_t g) { return qualifies(g, dets[j]); }) ||
-                   inDontCare(dont_care, frame, det.box, config.iou_threshold);
-      if (!ignored[j])
-      {
-        ++m.false_positives;
-      }
-    }
-    for (std::size_t j = 0; j < dets.size(); ++j)
-    {
-      if (!ignored[j])
-      {
-        ++detection_frames[det_id[dets[j]]];
-      }
-    }
-
-    for (std::size_t i = 0; i < truth.size(); ++i)
-    {
-      const std::size_t g = truth[i];
-      const std::int64_t id = gt_id[g];
-      TruthTrackState& state = truth_state[id];
-      ++m.ground_truth;
-      ++state.frames;
-      ++truth_frames[id];
-      for (std::size_t j = 0; j < dets.size(); ++j)
-      {
-        if (!ignored[j] && qualifies(g, dets[j]))
-        {
-          ++co_matched[{id, det_id[dets[j]]}];
-        }
-      }
-      if (truth_match[i] == kUnassigned)
-      {
-        ++m.misses;
-        state.interrupted = state.ever_matched;
-        continue;
-      }
-      const EvalObject& det = detections[dets[truth_match[i]]];
-      const std::int64_t matched_id = det_id[dets[truth_match[i]]];
-      ++m.matches;
-      ++state.matched_frames;
-      if (state.ever_matched && state.last_detection != matched_id)
-      {
-        ++m.id_switches;
-      }
-      if (state.interrupted)
-      {
-        ++m.fragmentations;
-      }
-      state.ever_matched = true;
-      state.interrupted = false;
-      state.last_detection = matched_id;
-
-      const EvalObject& t = ground_truth[g];
-      if (!state.moving_seen && t.has_state && std::hypot(t.vx, t.vy) >= config.latency_speed_mps)
-      {
-        state.moving_seen = true;
-        state.moving_since_s = det.time_s;
-        state.label = t.label;
-      }
-      if (state.moving_seen && !state.dynamic_seen && det.motion == Motion::kDynamic)
-      {
-        state.dynamic_seen = true;
-        state.latency_s = det.time_s - state.moving_since_s;
-      }
-
-      const Motion truth_motion = ground_truth[g].motion;
-      if (state.has_motion && truth_motion == state.last_truth && truth_motion != Motion::kUnknown)
-      {
-        if (det.motion != state.last_motion)
-        {
-          ++m.motion_changes;
-          if (state.has_change && det.time_s - state.last_change_s < config.flicker_window_s)
-          {
-            ++m.motion_flickers;
-            state.flickered = true;
-          }
-          state.has_change = true;
-          state.last_change_s = det.time_s;
-        }
-      }
-      else
-      {
-        state.has_change = false;  // the truth changed: a new constant stretch
-      }
-      state.has_motion = true;
-      state.last_motion = det.motion;
-      state.last_truth = truth_motion;
-    }
-  }
-
-  for (const auto& [id, state] : truth_state)
-  {
-    (void)id;
-    if (state.frames == 0)
-    {
-      continue;
-    }
-    ++m.truth_tracks;
-    const double share = static_cast<double>(state.matched_frames) / static_cast<double>(state.frames);
-    m.mostly_tracked += share >= 0.8 ? 1 : 0;
-    m.mostly_lost += share < 0.2 ? 1 : 0;
-    m.flickering_tracks += state.flickered ? 1 : 0;
-    if (state.moving_seen)
-    {
-      m.dynamic_latency.push_back({state.label, id, state.latency_s});
-    }
-  }
-  if (m.ground_truth > 0)
-  {
-    m.mota = 1.0 - static_cast<double>(m.misses + m.false_positives + m.id_switches) /
-                       static_cast<double>(m.ground_truth);
-  }
-  if (m.matches > 0)
-  {
-    m.id_switches_per_100 = 100.0 * static_cast<double>(m.id_switches) / static_cast<double>(m.matches);
-  }
-
-  // Identity: ground-truth identities (rows) to detection ids (columns) or to nothing (one dummy
-  // column per row), maximising the co-matched frames: cost = largest − co-matched.
-  std::vector<std::int64_t> truth_ids, det_ids;
-  for (const auto& entry : truth_frames)
-  {
-    truth_ids.push_back(entry.first);
-  }
-  for (const auto& entry : detection_frames)
-  {
-    det_ids.push_back(entry.first);
-  }
-  std::unordered_map<std::int64_t, std::size_t> det_column;
-  for (std::size_t c = 0; c < det_ids.size(); ++c)
-  {
-    det_column[det_ids[c]] = c;
-  }
-  double largest = 0.0;
-  for (const auto& entry : co_matched)
-  {
-    largest = std::max(largest, static_cast<double>(entry.second));
-  }
-  CostMatrix identity(truth_ids.size(), det_ids.size() + truth_ids.size());
-  std::fill(identity.cost.begin(), identity.cost.end(), largest);
-  std::unordered_map<std::int64_t, std::size_t> truth_row;
-  for (std::size_t r = 0; r < truth_ids.size(); ++r)
-  {
-    truth_row[truth_ids[r]] = r;
-  }
-  for (const auto& [pair, frames_together] : co_matched)
-  {
-    identity.at(truth_row.at(pair.first), det_column.at(pair.second)) =
-        largest - static_cast<double>(frames_together);
-  }
-  const std::vector<std::size_t> identity_match = solveAssignment(identity);
-  for (std::size_t r = 0; r < truth_ids.size(); ++r)
-  {
-    const std::size_t c = identity_match[r];
-    if (c != kUnassigned && c < det_ids.size())
-    {
-      const auto it = co_matched.find({truth_ids[r], det_ids[c]});
-      m.idtp += it == co_matched.end() ? 0 : it->second;
-    }
-  }
-  std::size_t truth_total = 0, detection_total = 0;
-  for (const auto& entry : truth_frames)
-  {
-    truth_total += entry.second;
-  }
-  for (const auto& entry : detection_frames)
-  {
-    detection_total += entry.second;
-  }
-  m.idfn = truth_total - m.idtp;
-  m.idfp = detection_total - m.idtp;
-  if (m.idtp > 0)
-  {
-    m.idp = static_cast<double>(m.idtp) / static_cast<double>(m.idtp + m.idfp);
-    m.idr = static_cast<double>(m.idtp) / static_cast<double>(m.idtp + m.idfn);
-    m.idf1 = 2.0 * static_cast<double>(m.idtp) / static_cast<double>(2 * m.idtp + m.idfp + m.idfn);
-  }
-  return m;
 }
 
 }  // namespace grid_vision_fusion

@@ -274,6 +274,17 @@ struct EvaluationResult
   std::optional<TrackingMetrics> tracking;
 };
 
+/// Whether `object` lies within the range limit: longitudinal_m <= `max_longitudinal_m`.
+bool inRange(const EvalObject& object, double max_longitudinal_m);
+
+/// The DontCare regions of each frame.
+using DontCareRegions = std::map<std::string, std::vector<BoundingBox>>;
+
+/// Whether `box` lies in a DontCare region of `frame`: intersection / area of `box` >= `overlap`
+/// ("+1 pixel" convention), as the KITTI devkit's boxoverlap(det, dontcare, "a").
+bool inDontCare(const DontCareRegions& regions, const std::string& frame, const BoundingBox& box,
+                double overlap);
+
 /// Whether evaluate() ignores the ground-truth object `truth`: difficult, or beyond the range
 /// limit (DontCare regions are no ground truth at all).
 bool ignoredTruth(const EvalObject& truth, const EvaluationConfig& config);
