@@ -150,6 +150,19 @@ gvf_gtest(test_repository_rules
   DEFINITIONS GVF_CLANG_FORMAT="${GVF_CLANG_FORMAT}"
     GVF_PLUGIN_LIBRARY="$<TARGET_FILE:grid_vision_fusion_nodelets>"
   DEPENDS grid_vision_fusion_nodelets)
+# The function-size rule: clang-tidy's readability-function-size (the repository's .clang-tidy)
+# over the sources of src/, tools/ and bench/ in compile_commands.json (CMAKE_BINARY_DIR, where
+# catkin_make and plain cmake both write it), one JUnit case (scripts/check_function_size.py).
+# The sources include the generated message and dynamic_reconfigure headers. Not in the
+# sanitizer build: it would read the same sources again, minutes more in CI's slowest step.
+if(GVF_SANITIZE)
+  message(STATUS "GVF_SANITIZE: the function-size rule (clang-tidy) runs in the plain build's tests only")
+else()
+  set(GVF_LINT_RESULT ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/lint-function_size.xml)
+  catkin_run_tests_target("lint" "function_size" "lint-function_size.xml"
+    COMMAND "${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/scripts/check_function_size.py --build-dir ${CMAKE_BINARY_DIR} --source-dir ${PROJECT_SOURCE_DIR} --junit ${GVF_LINT_RESULT}"
+    DEPENDENCIES ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
+endif()
 
 # --- the scenario suite (doc/scenario_suite.md): the summary script's unit tests, and a short
 # suite of two 7 s scenarios (test/data/suite_short) that fails when the motion classification

@@ -1,12 +1,14 @@
 // The habits of the repository, as tests: the tree is formatted with its own .clang-format,
 // every repository path that a document or a comment cites exists, the nodelet plugin library
-// carries on-vehicle code only (no simulator, evaluation, bag I/O or tool plumbing), no function
-// of the algorithms is longer than 100 lines and no source folder holds more than 10 files.
+// carries on-vehicle code only (no simulator, evaluation, bag I/O or tool plumbing), no source
+// file of src/, tools/, bench/ or include/ is longer than 1000 lines, no source folder holds more
+// than 10 files and no table row of the docs is longer than 400 characters. (No function of src/,
+// tools/ or bench/ is longer than 100 lines: clang-tidy's readability-function-size, configured
+// in .clang-tidy and run by scripts/check_function_size.py, the test lint-function_size.)
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -279,270 +281,28 @@ TEST(RepositoryRules, ThePluginLibraryCarriesOnlyOnVehicleCode)
   }
 }
 
-/// `text` with its comments, string and character literals and preprocessor lines blanked out
-/// (newlines kept, so that positions and line numbers stay), for counting braces.
-std::string codeOnly(const std::string& text)
-{
-  std::string code = text;
-  const std::size_t n = text.size();
-  auto blank = [&](std::size_t begin, std::size_t end)
-  {
-    for (std::size_t k = begin; k < std::min(end, n); ++k)
-    {
-      code[k] = code[k] == '\n' ? '\n' : ' ';
-    }
-  };
-  auto lineEnd = [&](std::size_t from)  // the end of a line, continued lines included
-  {
-    std::size_t end = text.find('\n', from);
-    while (end != std::string::npos && end > 0 && text[end - 1] == '\\')
-    {
-      end = text.find('\n', end + 1);
-    }
-    return end == std::string::npos ? n : end;
-  };
-  std::size_t i = 0;
-  while (i < n)
-  {
-    const std::size_t line = text.rfind('\n', i == 0 ? 0 : i - 1);
-    const std::size_t line_begin = i == 0 || line == std::string::npos ? 0 : line + 1;
-    const bool directive = text[i] == '#' && text.find_first_not_of(" \t", line_begin) == i;
-    std::size_t end = i + 1;
-    if (directive || text.compare(i, 2, "//") == 0)
-    {
-      end = lineEnd(i);
-      blank(i, end);
-    }
-    else if (text.compare(i, 2, "/*") == 0)
-    {
-      const std::size_t close = text.find("*/", i + 2);
-      end = close == std::string::npos ? n : close + 2;
-      blank(i, end);
-    }
-    else if (text.compare(i, 2, "R\"") == 0 && text.find('(', i) != std::string::npos)
-    {
-      const std::size_t open = text.find('(', i);
-      const std::size_t close = text.find(")" + text.substr(i + 2, open - i - 2) + "\"", open);
-      end = close == std::string::npos ? n : close + open - i;
-      blank(i + 1, end);
-    }
-    else if (text[i] == '"' ||
-             (text[i] == '\'' && !(i > 0 && std::isxdigit(static_cast<unsigned char>(text[i - 1])))))
-    {
-      while (end < n && text[end] != text[i] && text[end] != '\n')  // (1'000: a digit separator)
-      {
-        end += text[end] == '\\' ? 2 : 1;
-      }
-      blank(i + 1, end);
-      ++end;
-    }
-    i = end;
-  }
-  return code;
-}
+/// Longest .cpp or .h file, in lines: a longer one holds more than one concern and is split by
+/// them (issue 44). (The longest function, 100 lines, is clang-tidy's rule: .clang-tidy, checked by
+/// scripts/check_function_size.py.)
+constexpr std::size_t kMaxFileLines = 1000;
 
-/// A function definition of a source file: its name and the lines from its head to its closing
-/// brace.
-struct FunctionSpan
+TEST(RepositoryRules, NoSourceFileIsLongerThan1000Lines)
 {
-  std::string name;
-  std::size_t first_line = 0;
-  std::size_t lines = 0;
-};
-
-/// Whether `head`, the code before a `{` since the last `;`, `{`, `}` or access label, opens a
-/// function body: a parameter list, not after the keyword of a namespace, class, struct, union
-/// or enum, and no initialiser (`= {`).
-bool opensFunction(const std::string& head)
-{
-  const std::size_t paren = head.find('(');
-  const std::size_t last = head.find_last_not_of(" \t\n");
-  if (paren == std::string::npos || last == std::string::npos || head[last] == '=')
-  {
-    return false;
-  }
-  std::istringstream words(head.substr(0, paren));
-  for (std::string word; words >> word;)
-  {
-    if (word == "namespace" || word == "class" || word == "struct" || word == "union" || word == "enum")
-    {
-      return false;
-    }
-  }
-  return true;
-}
-
-/// The (qualified) name before the parameter list of a function head (attributes skipped).
-std::string functionName(const std::string& head)
-{
-  std::size_t paren = head.find('(');
-  while (paren != std::string::npos)
-  {
-    std::size_t end = paren;
-    while (end > 0 && std::isspace(static_cast<unsigned char>(head[end - 1])))
-    {
-      --end;
-    }
-    std::size_t begin = end;
-    while (begin > 0 && (std::isalnum(static_cast<unsigned char>(head[begin - 1])) ||
-                         std::string("_:~").find(head[begin - 1]) != std::string::npos))
-    {
-      --begin;
-    }
-    const std::string name = head.substr(begin, end - begin);
-    if (name != "__attribute__" && name != "alignas" && name != "__declspec")
-    {
-      return name;
-    }
-    int depth = 0;  // past the attribute's parentheses
-    for (; paren < head.size(); ++paren)
-    {
-      depth += head[paren] == '(' ? 1 : head[paren] == ')' ? -1 : 0;
-      if (depth == 0)
-      {
-        break;
-      }
-    }
-    paren = head.find('(', paren);
-  }
-  return "";
-}
-
-/// Whether `text` is an access specifier (the words before the colon of `public:`).
-bool isAccessLabel(const std::string& text)
-{
-  std::istringstream words(text);
-  std::string word;
-  std::string more;
-  words >> word >> more;
-  return more.empty() && (word == "public" || word == "protected" || word == "private");
-}
-
-/// The function definitions of the C++ source `text` at namespace or class scope (a lambda or a
-/// local class is part of the function that holds it).
-std::vector<FunctionSpan> functionSpans(const std::string& text)
-{
-  const std::string code = codeOnly(text);
-  auto lineOf = [&](std::size_t pos)
-  {
-    return 1 + static_cast<std::size_t>(
-                   std::count(code.begin(), code.begin() + static_cast<std::ptrdiff_t>(pos), '\n'));
-  };
-  struct Scope
-  {
-    bool function;
-    std::size_t head;  // where the head of a function starts
-    std::size_t brace;
-  };
-  std::vector<Scope> scopes;
-  std::vector<FunctionSpan> spans;
-  std::size_t statement = 0;  // where the code since the last `;`, `{`, `}` or access label starts
-  for (std::size_t i = 0; i < code.size(); ++i)
-  {
-    const char c = code[i];
-    if (c == '{')
-    {
-      const bool in_function =
-          std::any_of(scopes.begin(), scopes.end(), [](const Scope& s) { return s.function; });
-      const std::size_t head = std::min(code.find_first_not_of(" \t\n", statement), i);
-      scopes.push_back({!in_function && opensFunction(code.substr(head, i - head)), head, i});
-    }
-    else if (c == '}' && !scopes.empty())
-    {
-      const Scope scope = scopes.back();
-      scopes.pop_back();
-      if (scope.function)
-      {
-        const std::size_t first = lineOf(scope.head);
-        spans.push_back(
-            {functionName(code.substr(scope.head, scope.brace - scope.head)), first, lineOf(i) - first + 1});
-      }
-    }
-    if (c == '{' || c == '}' || c == ';' ||
-        (c == ':' && isAccessLabel(code.substr(statement, i - statement))))
-    {
-      statement = i + 1;
-    }
-  }
-  return spans;
-}
-
-TEST(RepositoryRules, TheFunctionScanMeasuresEveryDefinition)
-{
-  const std::string source = R"(// a { in a comment
-#include <map>  // {
-namespace ns
-{
-/* { */ const char* kText = "{ \" {";
-const std::map<int, int> kTable = {{1, 2}};
-struct Point
-{
-public:
-  int sum() const
-  {
-    return x + y;
-  }
-  int x, y;
-};
-template <typename F>
-void each(const F& f)
-{
-  auto g = [&](int k) { f(k); };
-  g('{');
-}
-A::A(int v) : v_(v)
-{
-}
-}  // namespace ns
-)";
-  const std::vector<FunctionSpan> spans = functionSpans(source);
-  ASSERT_EQ(spans.size(), 3U);
-  EXPECT_EQ(spans[0].name, "sum");
-  EXPECT_EQ(spans[0].first_line, 10U);
-  EXPECT_EQ(spans[0].lines, 4U);
-  EXPECT_EQ(spans[1].name, "each");
-  EXPECT_EQ(spans[1].first_line, 16U);
-  EXPECT_EQ(spans[1].lines, 6U);
-  EXPECT_EQ(spans[2].name, "A::A");
-  EXPECT_EQ(spans[2].lines, 3U);
-}
-
-/// Longest function of the algorithms, head to closing brace: above it a function holds more
-/// than one idea, and becomes a list of named steps (issue 27).
-constexpr std::size_t kMaxFunctionLines = 100;
-
-TEST(RepositoryRules, NoFunctionOfTheAlgorithmsIsLongerThan100Lines)
-{
-  // The exceptions, "<file>: <function>", each with its reason. (The Winograd micro-kernels of
-  // src/detection/winograd_convolution.cpp, one unrolled transform each, would be one; they fit.)
-  const std::set<std::string> allowed = {};
-  const auto files = repositoryFiles({"src/grid", "src/fusion", "src/projection", "src/detection"}, {".cpp"});
-  ASSERT_GT(files.size(), 10U);
-  std::size_t functions = 0;
-  std::set<std::string> found;
-  std::string too_long;
+  const auto files = repositoryFiles({"src", "tools", "bench", "include"}, {".h", ".cpp"});
+  ASSERT_GT(files.size(), 100U);
+  std::string long_files;
   for (const fs::path& file : files)
   {
-    const std::string path = fs::relative(file, kSource).string();
-    for (const FunctionSpan& span : functionSpans(readFile(file)))
+    const std::string text = readFile(file);
+    const auto lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+    if (lines > kMaxFileLines)
     {
-      ++functions;
-      const std::string id = path + ": " + span.name;
-      found.insert(id);
-      if (span.lines > kMaxFunctionLines && allowed.count(id) == 0)
-      {
-        too_long += "\n  " + path + ":" + std::to_string(span.first_line) + " " + span.name + " (" +
-                    std::to_string(span.lines) + " lines)";
-      }
+      long_files += "\n  " + fs::relative(file, kSource).string() + " (" + std::to_string(lines) + " lines)";
     }
   }
-  EXPECT_GT(functions, 200U);
-  EXPECT_TRUE(too_long.empty()) << "functions longer than " << kMaxFunctionLines
-                                << " lines: split them into named steps" << too_long;
-  for (const std::string& id : allowed)
-  {
-    EXPECT_EQ(found.count(id), 1U) << "the allowed " << id << " is gone: take it off the list";
-  }
+  EXPECT_TRUE(long_files.empty()) << "source files longer than " << kMaxFileLines
+                                  << " lines: split each by concern into files of the same folder"
+                                  << long_files;
 }
 
 /// Most .cpp/.h files one folder holds: a larger one is split by concern (issue 27).
