@@ -10,7 +10,7 @@ packages=(
   build-essential cmake pkg-config
   ros-base-dev catkin rosbash ros-message-generation
   libnodelet-dev libnodeletlib-dev libnodeletlib-tools
-  libopencv-dev libcv-bridge-dev libtbb-dev nlohmann-json3-dev
+  libopencv-dev libcv-bridge-dev libtbb-dev nlohmann-json3-dev libboost-dev
   libimage-transport-dev libimage-geometry-dev librosbag-dev
   libtf2-ros-dev libtf2-eigen-dev libmessage-filters-dev
   libsensor-msgs-dev libvisualization-msgs-dev libgeometry-msgs-dev libnav-msgs-dev

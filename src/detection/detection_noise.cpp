@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "grid_vision_fusion/detection/detection_replay.h"
-#include "grid_vision_fusion/grid/dynamic_grid_filter.h"  // inverseNormalCdf
+#include "grid_vision_fusion/normal_quantile.h"
 #include "grid_vision_fusion/splitmix64.h"
 
 namespace grid_vision_fusion
@@ -24,16 +24,6 @@ enum class Stream : std::uint64_t
   kExtra = 6,
   kFalsePositive = 7,
 };
-
-/// The standard normal quantile: the grid's approximation (relative error < 1.2e-9) refined by
-/// one Halley step, p in (0, 1).
-double normalQuantile(double p)
-{
-  const double x = inverseNormalCdf(p);
-  const double e = 0.5 * std::erfc(-x / std::sqrt(2.0)) - p;
-  const double u = e * std::sqrt(2.0 * M_PI) * std::exp(x * x / 2.0);
-  return x - u / (1.0 + x * u / 2.0);
-}
 
 /// The first number of a SplitMix64 stream seeded with `x`: a hash that chains the seed's parts.
 std::uint64_t splitMix(std::uint64_t x)

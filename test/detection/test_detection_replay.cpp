@@ -1,7 +1,7 @@
 // DetectionReplay: frame indices, file names, class mapping, scores, clipping, errors; the
 // detector noise drawn on the labels (detection_noise.h): off = the oracle boxes, seeded and
 // history-free, each component's statistics over many draws against its parameters, errors
-// naming the key.
+// naming the key; the normal quantile of its truncated draws (normal_quantile.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,11 +10,13 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <tuple>
 
 #include "grid_vision_fusion/detection/detection_replay.h"
+#include "grid_vision_fusion/normal_quantile.h"
 
 namespace grid_vision_fusion
 {
@@ -418,6 +420,68 @@ TEST(DetectionNoiseTest, PresenceAndScoresFollowTheModel)
       EXPECT_GE(d.score, floor.min_score);
       EXPECT_LE(d.score, floor.score_max);
     }
+  }
+}
+
+TEST(DetectionNoiseTest, ScoresFarBelowTheFloorStayAtTheFloor)
+{
+  // The score's normal truncated at a = (floor - mean) / sigma far in its tail: P(Z >= a) down to
+  // subnormal (a = 37.9) and to 0 (a = 45); every score finite, at or just above min_score.
+  DetectionNoiseConfig c = quietNoise();
+  c.misses = true;
+  c.score_sigma = 1.0;
+  const double h = kCarBox.y_max - kCarBox.y_min;
+  const double floor = std::log((c.min_score / c.score_max) / (1.0 - c.min_score / c.score_max));
+  for (const double a : {3.0, 10.0, 20.0, 37.9, 45.0})
+  {
+    SCOPED_TRACE(a);
+    c.score.car = 0.0;
+    c.score.car = floor - a - c.score.predictor(0, h, 0, 0.0);
+    int found = 0;
+    for (int frame = 0; frame < 500; ++frame)
+    {
+      for (const Detection& d : applyDetectionNoise(c, frame, {noiseLabel("car", kCarBox)}, 1242, 375))
+      {
+        ++found;
+        ASSERT_TRUE(std::isfinite(d.score));
+        EXPECT_GE(d.score, c.min_score);
+        // Z - a of a normal truncated at a > 0 is about exponential with mean 1 / a: below 20 / a.
+        EXPECT_LE(d.score, c.score_max * sigmoidOf(floor + 20.0 / a));
+      }
+    }
+    EXPECT_GT(found, 400);
+  }
+}
+
+TEST(NormalQuantileTest, BoostMathsQuantileOverTheWholeInterval)
+{
+  EXPECT_EQ(normalQuantile(0.5), 0.0);
+  EXPECT_NEAR(normalQuantile(0.975), 1.959963984540054, 1e-15);
+  EXPECT_NEAR(normalQuantile(0.025), -1.959963984540054, 1e-15);
+  EXPECT_NEAR(normalQuantile(0.8413447460685429), 1.0, 1e-14);  // Phi(1)
+  EXPECT_NEAR(normalQuantile(1e-10), -6.361340902404056, 1e-13);
+  // Phi(x(p)) = p, relative, deep into both tails.
+  for (const double p : {1e-300, 1e-100, 1e-20, 1e-5, 0.1, 0.3, 0.7, 0.9, 0.999})
+  {
+    const double x = normalQuantile(p);
+    EXPECT_NEAR(0.5 * std::erfc(-x / std::sqrt(2.0)) / p, 1.0, 1e-12) << p;
+  }
+  EXPECT_NEAR(normalQuantile(std::numeric_limits<double>::denorm_min()), -38.4674, 1e-4);
+  EXPECT_NEAR(normalQuantile(1.0 - 1e-16), 8.2095, 1e-4);
+  // Outside (0, 1): a domain error that names p (0 and 1, whose quantiles are infinite, too).
+  for (const double p : {0.0, 1.0, -0.5, 1.5, std::numeric_limits<double>::quiet_NaN(),
+                         std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()})
+  {
+    EXPECT_THROW(normalQuantile(p), std::domain_error) << p;
+  }
+  try
+  {
+    normalQuantile(1.0);
+    FAIL() << "no exception";
+  }
+  catch (const std::domain_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("not in (0, 1)"), std::string::npos) << e.what();
   }
 }
 
