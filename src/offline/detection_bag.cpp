@@ -87,12 +87,11 @@ DetectedObject inFrame(DetectedObject object, const Eigen::Isometry3d& to_from_m
 }
 }  // namespace
 
-DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDrive& drive,
-                                    const DetectionBagConfig& config, const KittiGroundTruthConfig& labels,
-                                    const std::function<void(std::size_t, std::size_t)>& progress)
+namespace
 {
-  config.validate();
-  rosbag::Bag bag;
+/// Opens `bag` at `bag_path` for reading.
+void openBag(rosbag::Bag& bag, const std::string& bag_path)
+{
   try
   {
     bag.open(bag_path, rosbag::bagmode::Read);
@@ -101,6 +100,150 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
   {
     throw std::runtime_error(bagReadError(bag_path, e.what()));
   }
+}
+
+/// The error for a bag without a message on `topic`, naming the topics it has.
+std::runtime_error noMessageError(const std::string& bag_path, const rosbag::Bag& bag,
+                                  const std::string& topic)
+{
+  std::string topics;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections())
+  {
+    if (topics.find(" " + c->topic + " ") == std::string::npos)
+    {
+      topics += " " + c->topic + " ";
+    }
+  }
+  return std::runtime_error(
+      bag_path + ": no message on topic " + topic +
+      (topics.empty() ? std::string(" (the bag is empty)") : " (topics:" + topics + ")"));
+}
+
+/// One message's objects for its frame, and how far its stamp lies from the frame's.
+struct Kept
+{
+  double gap = 0.0;
+  std::vector<EvalObject> objects;
+};
+
+/// What readDetectionBag() reads every message with.
+struct DetectionBagReader
+{
+  const std::string& bag_path;
+  const KittiDrive& drive;
+  const DetectionBagConfig& config;
+  const KittiGroundTruthConfig& labels;
+  std::vector<double> times;  ///< the drive's frame times
+};
+
+/// The pose of the message's frame in the world at `frame`: the drive's odom pose when the
+/// message is in the odometry frame, else the identity (counted when not the world frame).
+Eigen::Isometry3d worldFromMessage(const DetectionBagReader& reader, const std::string& frame_id, int frame,
+                                   DetectionBagStats& stats)
+{
+  Eigen::Isometry3d world_from_message = Eigen::Isometry3d::Identity();
+  if (frame_id == reader.config.odom_frame && frame_id != reader.config.world_frame)
+  {
+    try
+    {
+      world_from_message = reader.drive.worldFromOdom(frame);
+    }
+    catch (const std::out_of_range& e)
+    {
+      throw std::runtime_error(reader.bag_path + ": detections in " + reader.config.odom_frame + ", but " +
+                               e.what());
+    }
+  }
+  else if (frame_id != reader.config.world_frame)
+  {
+    ++stats.other_frame;
+  }
+  return world_from_message;
+}
+
+/// The objects of the message `msg` stamped `t` as evaluation objects of `frame`: the finite ones
+/// of a class the labels know.
+Kept keptObjects(const DetectionBagReader& reader, const DetectedObjectArray& msg, int frame, double t,
+                 DetectionBagStats& stats)
+{
+  const Eigen::Isometry3d world_from_message = worldFromMessage(reader, msg.header.frame_id, frame, stats);
+  Kept kept;
+  kept.gap = std::abs(reader.times[static_cast<std::size_t>(frame)] - t);
+  const std::string frame_name = kittiFrameName(frame);
+  const Eigen::Isometry3d velo_from_world = reader.drive.worldFromVelo(frame).inverse();
+  for (const DetectedObject& object : msg.objects)
+  {
+    if (!finite(object))
+    {
+      ++stats.invalid_objects;
+      continue;
+    }
+    const std::string label = reader.labels.labelOf(object.label);
+    if (label.empty())
+    {
+      ++stats.dropped_labels;
+      continue;
+    }
+    kept.objects.push_back(
+        toEvalObject(inFrame(object, world_from_message), frame_name, velo_from_world, label));
+    kept.objects.back().time_s = reader.times[static_cast<std::size_t>(frame)];
+  }
+  return kept;
+}
+
+/// Every message of `view` (`total` of them) by the drive frame nearest its stamp; of two for one
+/// frame the one nearer in time.
+std::map<int, Kept> keptFrames(const DetectionBagReader& reader, rosbag::View& view, std::size_t total,
+                               const std::function<void(std::size_t, std::size_t)>& progress,
+                               DetectionBagStats& stats)
+{
+  std::map<int, Kept> by_frame;
+  std::size_t read = 0;
+  for (const rosbag::MessageInstance& m : view)
+  {
+    const DetectedObjectArray::ConstPtr msg = m.instantiate<DetectedObjectArray>();
+    if (!msg)
+    {
+      throw std::runtime_error(reader.bag_path + ": topic " + reader.config.topic + " carries " +
+                               m.getDataType() + ", not grid_vision_fusion/DetectedObjectArray");
+    }
+    ++read;
+    ++stats.messages;
+    if (progress)
+    {
+      progress(read, total);
+    }
+    const double t = msg->header.stamp.toSec();
+    const int frame = nearestFrame(reader.times, t, reader.config.stamp_tolerance_s);
+    if (frame < 0)
+    {
+      ++stats.unmatched;
+      continue;
+    }
+    Kept kept = keptObjects(reader, *msg, frame, t, stats);
+    const auto existing = by_frame.find(frame);
+    if (existing != by_frame.end())
+    {
+      ++stats.duplicates;
+      if (existing->second.gap <= kept.gap)
+      {
+        continue;
+      }
+    }
+    by_frame[frame] = std::move(kept);
+  }
+  return by_frame;
+}
+}  // namespace
+
+DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDrive& drive,
+                                    const DetectionBagConfig& config, const KittiGroundTruthConfig& labels,
+                                    const std::function<void(std::size_t, std::size_t)>& progress)
+{
+  config.validate();
+  rosbag::Bag bag;
+  openBag(bag, bag_path);
   DetectionBagResult result;
   try
   {
@@ -108,96 +251,10 @@ DetectionBagResult readDetectionBag(const std::string& bag_path, const KittiDriv
     const std::size_t total = view.size();
     if (total == 0)
     {
-      std::string topics;
-      rosbag::View all(bag);
-      for (const rosbag::ConnectionInfo* c : all.getConnections())
-      {
-        if (topics.find(" " + c->topic + " ") == std::string::npos)
-        {
-          topics += " " + c->topic + " ";
-        }
-      }
-      throw std::runtime_error(
-          bag_path + ": no message on topic " + config.topic +
-          (topics.empty() ? std::string(" (the bag is empty)") : " (topics:" + topics + ")"));
+      throw noMessageError(bag_path, bag, config.topic);
     }
-    const std::vector<double> times = drive.frameTimes();
-    struct Kept
-    {
-      double gap = 0.0;
-      std::vector<EvalObject> objects;
-    };
-    std::map<int, Kept> by_frame;
-    std::size_t read = 0;
-    for (const rosbag::MessageInstance& m : view)
-    {
-      const DetectedObjectArray::ConstPtr msg = m.instantiate<DetectedObjectArray>();
-      if (!msg)
-      {
-        throw std::runtime_error(bag_path + ": topic " + config.topic + " carries " + m.getDataType() +
-                                 ", not grid_vision_fusion/DetectedObjectArray");
-      }
-      ++read;
-      ++result.stats.messages;
-      if (progress)
-      {
-        progress(read, total);
-      }
-      const double t = msg->header.stamp.toSec();
-      const int frame = nearestFrame(times, t, config.stamp_tolerance_s);
-      if (frame < 0)
-      {
-        ++result.stats.unmatched;
-        continue;
-      }
-      Eigen::Isometry3d world_from_message = Eigen::Isometry3d::Identity();
-      if (msg->header.frame_id == config.odom_frame && msg->header.frame_id != config.world_frame)
-      {
-        try
-        {
-          world_from_message = drive.worldFromOdom(frame);
-        }
-        catch (const std::out_of_range& e)
-        {
-          throw std::runtime_error(bag_path + ": detections in " + config.odom_frame + ", but " + e.what());
-        }
-      }
-      else if (msg->header.frame_id != config.world_frame)
-      {
-        ++result.stats.other_frame;
-      }
-      Kept kept;
-      kept.gap = std::abs(times[static_cast<std::size_t>(frame)] - t);
-      const std::string frame_name = kittiFrameName(frame);
-      const Eigen::Isometry3d velo_from_world = drive.worldFromVelo(frame).inverse();
-      for (const DetectedObject& object : msg->objects)
-      {
-        if (!finite(object))
-        {
-          ++result.stats.invalid_objects;
-          continue;
-        }
-        const std::string label = labels.labelOf(object.label);
-        if (label.empty())
-        {
-          ++result.stats.dropped_labels;
-          continue;
-        }
-        kept.objects.push_back(
-            toEvalObject(inFrame(object, world_from_message), frame_name, velo_from_world, label));
-        kept.objects.back().time_s = times[static_cast<std::size_t>(frame)];
-      }
-      const auto existing = by_frame.find(frame);
-      if (existing != by_frame.end())
-      {
-        ++result.stats.duplicates;
-        if (existing->second.gap <= kept.gap)
-        {
-          continue;
-        }
-      }
-      by_frame[frame] = std::move(kept);
-    }
+    const DetectionBagReader reader{bag_path, drive, config, labels, drive.frameTimes()};
+    std::map<int, Kept> by_frame = keptFrames(reader, view, total, progress, result.stats);
     for (auto& [frame, kept] : by_frame)
     {
       result.frames.insert(frame);

@@ -447,17 +447,26 @@ geometry_msgs::TwistStamped oxtsToTwist(const OxtsRecord& record, const ros::Tim
   return twist;
 }
 
-KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
+namespace
 {
-  options.validate();
-  const std::string& drive = options.drive_dir;
-  std::error_code error;
-  if (!fs::is_directory(drive, error))
-  {
-    throw std::runtime_error("missing drive folder " + drive);
-  }
-  const KittiRawCalibration calibration = KittiRawCalibration::readDirectory(options.calibrationDirectory());
+/// What convertKittiDrive() writes: every input read and checked to cover the frames before the
+/// bag is opened.
+struct DriveInputs
+{
+  KittiRawCalibration calibration;
+  int first = 0;
+  int last = 0;
+  std::vector<KittiStamp> velo_stamps, oxts_stamps;
+  std::vector<KittiCameraNames> cameras;
+  std::vector<std::vector<KittiStamp>> camera_stamps;  ///< per camera of `cameras`
+  std::vector<OxtsRecord> records;                     ///< from frame `first` to `last`
+  std::vector<Eigen::Isometry3d> poses, odometry;      ///< of `records`
+  ros::Time start;  ///< the earliest stamp of the first frame: the static transforms'
+};
 
+/// Every camera of `options` has a calibration.
+void checkCameraCalibration(const KittiBagOptions& options, const KittiRawCalibration& calibration)
+{
   for (const int camera : options.cameras)
   {
     try
@@ -470,26 +479,11 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
                                "/calib_cam_to_cam.txt: " + e.what());
     }
   }
+}
 
-  const int first = options.first_frame;
-  const int last = options.last_frame >= 0 ? options.last_frame : countVelodyneScans(drive) - 1;
-  if (last < first)
-  {
-    throw std::invalid_argument("first_frame " + std::to_string(first) + " is after the last frame of " +
-                                drive + " (" + std::to_string(last) + ")");
-  }
-  const auto total = static_cast<std::size_t>(last - first + 1);
-
-  // Every input is checked to cover the range before the bag is opened.
-  const std::vector<KittiStamp> velo_stamps = readSensorStamps(drive, "velodyne_points", last);
-  const std::vector<KittiStamp> oxts_stamps = readSensorStamps(drive, "oxts", last);
-  std::vector<KittiCameraNames> cameras;
-  std::vector<std::vector<KittiStamp>> camera_stamps;
-  for (const int camera : options.cameras)
-  {
-    cameras.push_back(kittiCameraNames(camera));
-    camera_stamps.push_back(readSensorStamps(drive, cameras.back().folder, last));
-  }
+/// The OXTS records of the frames `first` to `last`.
+std::vector<OxtsRecord> oxtsRecords(const std::string& drive, int first, int last)
+{
   std::vector<OxtsRecord> records = readOxtsFolder(drive + "/oxts");
   if (records.size() <= static_cast<std::size_t>(last))
   {
@@ -497,114 +491,179 @@ KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
                              frameFile(drive, "oxts", static_cast<int>(records.size()), ".txt") +
                              " does not exist (frame " + std::to_string(last) + " requested)");
   }
-  records = std::vector<OxtsRecord>(records.begin() + first, records.begin() + last + 1);
-  const std::vector<Eigen::Isometry3d> poses = oxtsPosesRelativeToFirst(records);
-  const std::vector<Eigen::Isometry3d> odometry = alongHeadingPoses(poses);
+  return std::vector<OxtsRecord>(records.begin() + first, records.begin() + last + 1);
+}
+
+DriveInputs readDriveInputs(const KittiBagOptions& options)
+{
+  const std::string& drive = options.drive_dir;
+  std::error_code error;
+  if (!fs::is_directory(drive, error))
+  {
+    throw std::runtime_error("missing drive folder " + drive);
+  }
+  DriveInputs in;
+  in.calibration = KittiRawCalibration::readDirectory(options.calibrationDirectory());
+  checkCameraCalibration(options, in.calibration);
+
+  in.first = options.first_frame;
+  in.last = options.last_frame >= 0 ? options.last_frame : countVelodyneScans(drive) - 1;
+  if (in.last < in.first)
+  {
+    throw std::invalid_argument("first_frame " + std::to_string(in.first) + " is after the last frame of " +
+                                drive + " (" + std::to_string(in.last) + ")");
+  }
+  in.velo_stamps = readSensorStamps(drive, "velodyne_points", in.last);
+  in.oxts_stamps = readSensorStamps(drive, "oxts", in.last);
+  for (const int camera : options.cameras)
+  {
+    in.cameras.push_back(kittiCameraNames(camera));
+    in.camera_stamps.push_back(readSensorStamps(drive, in.cameras.back().folder, in.last));
+  }
+  in.records = oxtsRecords(drive, in.first, in.last);
+  in.poses = oxtsPosesRelativeToFirst(in.records);
+  in.odometry = alongHeadingPoses(in.poses);
 
   // The static transforms precede every message of the first frame.
-  ros::Time start = toRosTime(velo_stamps[static_cast<std::size_t>(first)]);
-  start = std::min(start, toRosTime(oxts_stamps[static_cast<std::size_t>(first)]));
-  for (const auto& stamps : camera_stamps)
+  const auto first = static_cast<std::size_t>(in.first);
+  in.start = toRosTime(in.velo_stamps[first]);
+  in.start = std::min(in.start, toRosTime(in.oxts_stamps[first]));
+  for (const auto& stamps : in.camera_stamps)
   {
-    start = std::min(start, toRosTime(stamps[static_cast<std::size_t>(first)]));
+    in.start = std::min(in.start, toRosTime(stamps[first]));
   }
+  return in;
+}
 
+/// Writes messages into a bag being written to `temporary`, counting them in `summary`.
+struct BagWriter
+{
+  rosbag::Bag& bag;
+  const std::string& temporary;
+  KittiBagSummary& summary;
+
+  template <class Message>
+  void operator()(const std::string& topic, const ros::Time& stamp, const Message& msg,
+                  const boost::shared_ptr<ros::M_string>& connection_header = {})
+  {
+    try
+    {
+      bag.write(topic, stamp, msg, connection_header);
+    }
+    catch (const rosbag::BagException& e)
+    {
+      throw std::runtime_error("cannot write " + topic + " to bag " + temporary + ": " + e.what());
+    }
+    ++summary.messages;
+  }
+};
+
+/// The static transforms and, when the first OXTS record comes shortly after them, the pose
+/// extrapolated back to their stamp.
+void writeStart(BagWriter& write, const DriveInputs& in, const KittiBagOptions& options)
+{
+  tf2_msgs::TFMessage static_tf;
+  static_tf.transforms = kittiStaticTransforms(in.calibration, options.cameras, in.start);
+  write("/tf_static", in.start, static_tf, latchedConnectionHeader<tf2_msgs::TFMessage>());
+  const double lead = (toRosTime(in.oxts_stamps[static_cast<std::size_t>(in.first)]) - in.start).toSec();
+  if (lead > 0.0 && lead <= kMaxPoseExtrapolationS)
+  {
+    tf2_msgs::TFMessage tf;
+    tf.transforms.push_back(toTransformMsg(Eigen::Isometry3d::Identity(), kWorldFrame, kOdomFrame, in.start));
+    tf.transforms.push_back(toTransformMsg(poseBefore(in.odometry.front(), in.records.front(), lead),
+                                           kOdomFrame, kBaseFrame, in.start));
+    write("/tf", in.start, tf);
+  }
+}
+
+/// One frame's messages: the transforms and the OXTS messages, the scan, each camera's image
+/// and camera_info.
+void writeFrame(BagWriter& write, const DriveInputs& in, const KittiBagOptions& options, int frame)
+{
+  const auto index = static_cast<std::size_t>(frame);
+  const std::size_t local = index - static_cast<std::size_t>(in.first);
+
+  const ros::Time oxts_stamp = toRosTime(in.oxts_stamps[index]);
+  // REP 105: world → odom → base_link. The grid and the tracks live in the continuous odom
+  // frame; world ← base_link is the OXTS pose, as before.
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(
+      toTransformMsg(in.poses[local] * in.odometry[local].inverse(), kWorldFrame, kOdomFrame, oxts_stamp));
+  tf.transforms.push_back(toTransformMsg(in.odometry[local], kOdomFrame, kBaseFrame, oxts_stamp));
+  write("/tf", oxts_stamp, tf);
+  write(kImuTopic, oxts_stamp, oxtsToImu(in.records[local], oxts_stamp));
+  write(kGpsFixTopic, oxts_stamp, oxtsToNavSatFix(in.records[local], oxts_stamp));
+  write(kGpsVelTopic, oxts_stamp, oxtsToTwist(in.records[local], oxts_stamp));
+
+  // Sensor messages carry the KITTI frame index in header.seq, so that per-frame files
+  // (e.g. label_2 for the detection replay) can be found from a message.
+  const std::string& drive = options.drive_dir;
+  const ros::Time velo_stamp = toRosTime(in.velo_stamps[index]);
+  sensor_msgs::PointCloud2 cloud =
+      readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp);
+  cloud.header.seq = static_cast<std::uint32_t>(frame);
+  write(kVeloTopic, velo_stamp, cloud);
+
+  for (std::size_t c = 0; c < in.cameras.size(); ++c)
+  {
+    const int camera = options.cameras[c];
+    const auto& size = in.calibration.image_size[static_cast<std::size_t>(camera)];
+    const ros::Time stamp = toRosTime(in.camera_stamps[c][index]);
+    sensor_msgs::Image image = readKittiImage(frameFile(drive, in.cameras[c].folder, frame, ".png"), camera,
+                                              size[0], size[1], stamp);
+    image.header.seq = static_cast<std::uint32_t>(frame);
+    write(in.cameras[c].image_topic, stamp, image);
+    sensor_msgs::CameraInfo info = kittiCameraInfo(in.calibration, camera, stamp);
+    info.header.seq = static_cast<std::uint32_t>(frame);
+    write(in.cameras[c].info_topic, stamp, info);
+  }
+}
+
+/// The bag at `temporary`: the start, then every frame.
+void writeBag(const std::string& temporary, const DriveInputs& in, const KittiBagOptions& options,
+              KittiBagSummary& summary)
+{
+  rosbag::Bag bag;
+  try
+  {
+    bag.open(temporary, rosbag::bagmode::Write);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot write bag " + temporary + ": " + e.what());
+  }
+  bag.setCompression(compressionType(options.compression));
+  BagWriter write{bag, temporary, summary};
+  writeStart(write, in, options);
+  const auto total = static_cast<std::size_t>(in.last - in.first + 1);
+  for (int frame = in.first; frame <= in.last; ++frame)
+  {
+    writeFrame(write, in, options, frame);
+    ++summary.frames;
+    if (options.progress)
+    {
+      options.progress(summary.frames, total);
+    }
+  }
+  try
+  {
+    bag.close();
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot finish bag " + temporary + ": " + e.what());
+  }
+}
+}  // namespace
+
+KittiBagSummary convertKittiDrive(const KittiBagOptions& options)
+{
+  options.validate();
+  const DriveInputs in = readDriveInputs(options);
   TemporaryOutput output(options.output_bag);
-  const std::string& temporary = output.temporary();
   KittiBagSummary summary;
   summary.output_bag = options.output_bag;
-  {
-    rosbag::Bag bag;
-    try
-    {
-      bag.open(temporary, rosbag::bagmode::Write);
-    }
-    catch (const rosbag::BagException& e)
-    {
-      throw std::runtime_error("cannot write bag " + temporary + ": " + e.what());
-    }
-    bag.setCompression(compressionType(options.compression));
-    const auto write = [&](const std::string& topic, const ros::Time& stamp, const auto& msg,
-                           const boost::shared_ptr<ros::M_string>& connection_header = {})
-    {
-      try
-      {
-        bag.write(topic, stamp, msg, connection_header);
-      }
-      catch (const rosbag::BagException& e)
-      {
-        throw std::runtime_error("cannot write " + topic + " to bag " + temporary + ": " + e.what());
-      }
-      ++summary.messages;
-    };
-
-    tf2_msgs::TFMessage static_tf;
-    static_tf.transforms = kittiStaticTransforms(calibration, options.cameras, start);
-    write("/tf_static", start, static_tf, latchedConnectionHeader<tf2_msgs::TFMessage>());
-    const double lead = (toRosTime(oxts_stamps[static_cast<std::size_t>(first)]) - start).toSec();
-    if (lead > 0.0 && lead <= kMaxPoseExtrapolationS)
-    {
-      tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(toTransformMsg(Eigen::Isometry3d::Identity(), kWorldFrame, kOdomFrame, start));
-      tf.transforms.push_back(
-          toTransformMsg(poseBefore(odometry.front(), records.front(), lead), kOdomFrame, kBaseFrame, start));
-      write("/tf", start, tf);
-    }
-
-    for (int frame = first; frame <= last; ++frame)
-    {
-      const auto index = static_cast<std::size_t>(frame);
-      const std::size_t local = index - static_cast<std::size_t>(first);
-
-      const ros::Time oxts_stamp = toRosTime(oxts_stamps[index]);
-      // REP 105: world → odom → base_link. The grid and the tracks live in the continuous odom
-      // frame; world ← base_link is the OXTS pose, as before.
-      tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(
-          toTransformMsg(poses[local] * odometry[local].inverse(), kWorldFrame, kOdomFrame, oxts_stamp));
-      tf.transforms.push_back(toTransformMsg(odometry[local], kOdomFrame, kBaseFrame, oxts_stamp));
-      write("/tf", oxts_stamp, tf);
-      write(kImuTopic, oxts_stamp, oxtsToImu(records[local], oxts_stamp));
-      write(kGpsFixTopic, oxts_stamp, oxtsToNavSatFix(records[local], oxts_stamp));
-      write(kGpsVelTopic, oxts_stamp, oxtsToTwist(records[local], oxts_stamp));
-
-      // Sensor messages carry the KITTI frame index in header.seq, so that per-frame files
-      // (e.g. label_2 for the detection replay) can be found from a message.
-      const ros::Time velo_stamp = toRosTime(velo_stamps[index]);
-      sensor_msgs::PointCloud2 cloud =
-          readVelodyneScan(frameFile(drive, "velodyne_points", frame, ".bin"), velo_stamp);
-      cloud.header.seq = static_cast<std::uint32_t>(frame);
-      write(kVeloTopic, velo_stamp, cloud);
-
-      for (std::size_t c = 0; c < cameras.size(); ++c)
-      {
-        const int camera = options.cameras[c];
-        const auto& size = calibration.image_size[static_cast<std::size_t>(camera)];
-        const ros::Time stamp = toRosTime(camera_stamps[c][index]);
-        sensor_msgs::Image image = readKittiImage(frameFile(drive, cameras[c].folder, frame, ".png"), camera,
-                                                  size[0], size[1], stamp);
-        image.header.seq = static_cast<std::uint32_t>(frame);
-        write(cameras[c].image_topic, stamp, image);
-        sensor_msgs::CameraInfo info = kittiCameraInfo(calibration, camera, stamp);
-        info.header.seq = static_cast<std::uint32_t>(frame);
-        write(cameras[c].info_topic, stamp, info);
-      }
-
-      ++summary.frames;
-      if (options.progress)
-      {
-        options.progress(summary.frames, total);
-      }
-    }
-    try
-    {
-      bag.close();
-    }
-    catch (const rosbag::BagException& e)
-    {
-      throw std::runtime_error("cannot finish bag " + temporary + ": " + e.what());
-    }
-  }
+  writeBag(output.temporary(), in, options, summary);
   output.commit();
   return summary;
 }
