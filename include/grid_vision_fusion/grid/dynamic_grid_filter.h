@@ -356,8 +356,4 @@ private:
   Eigen::Vector3d sensor_origin_ = Eigen::Vector3d::Zero();  ///< of the last scan, fixed frame [m]
 };
 
-/// Inverse of the standard normal CDF (Acklam's rational approximation, relative error
-/// < 1.2e-9) for p in (0, 1).
-double inverseNormalCdf(double p);
-
 }  // namespace grid_vision_fusion
