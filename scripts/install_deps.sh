@@ -16,7 +16,7 @@ packages=(
   libsensor-msgs-dev libvisualization-msgs-dev libgeometry-msgs-dev libnav-msgs-dev
   libdynamic-reconfigure-config-init-mutex-dev libdiagnostic-updater-dev
   python3-rostest python3-roslaunch librostest-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev clang-format clang-tidy
+  libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libboost-program-options-dev clang-format clang-tidy
   python3-rospy python3-sensor-msgs python3-geometry-msgs python3-nav-msgs
   python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag python3-yaml
   python3-diagnostic-msgs python3-rostopic

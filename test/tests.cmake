@@ -44,7 +44,8 @@ gvf_gtest(test_simulation
   SOURCES test/simulation/test_synthetic_world.cpp test/simulation/test_synthetic_camera.cpp
     test/simulation/test_synthetic_scenario.cpp test/simulation/test_synthetic_drive.cpp
   LINK grid_vision_fusion_simulation)
-gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_info.cpp LINK grid_vision_fusion_cli)
+gvf_gtest(test_cli SOURCES test/cli/test_progress_bar.cpp test/cli/test_machine_info.cpp
+  test/cli/test_command_line.cpp LINK grid_vision_fusion_cli)
 
 # --- ROS layer and offline (no master) ---------------------------------------------------------
 gvf_gtest(test_ros

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -23,6 +24,7 @@
 #include <string>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/fusion/fusion.h"
@@ -45,11 +47,49 @@ const char* const kUsage =
     "  --video FILE       write the overlay images as an MJPG .avi video at 10 fps\n"
     "  -h, --help         this text\n";
 
+constexpr int kExitFailure = 1;  ///< also the exit status of usage errors
+
 int fail(const std::string& message)
 {
   std::cerr << "bag_summary: " << message << '\n';
-  return 1;
+  return kExitFailure;
 }
+
+struct Options
+{
+  std::string bag, objects_topic = "/objects", images_topic = "/objects/image", frames_dir, video;
+};
+
+/// Reads the command line into `o`; false when --help was asked for. @throws UsageError
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  namespace po = boost::program_options;
+  bool help = false;
+  po::options_description options;
+  options.add_options()                         //
+      ("bag", po::value(&o.bag))                //
+      ("objects", po::value(&o.objects_topic))  //
+      ("images", po::value(&o.images_topic))    //
+      ("frames-dir", po::value(&o.frames_dir))  //
+      ("video", po::value(&o.video))            //
+      ("help,h", po::bool_switch(&help));
+  grid_vision_fusion::parseCommandLine(argc, argv, options);
+  if (help)
+  {
+    return false;
+  }
+  if (o.bag.empty())
+  {
+    throw grid_vision_fusion::UsageError("--bag is required");
+  }
+  return true;
+}
+
+/// A failure to write the frames or the video (the bag is not at fault).
+struct ExportError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
 
 struct Counts
 {
@@ -67,197 +107,222 @@ struct TrackSummary
   std::uint8_t last_motion = 0;
   std::size_t motion_changes = 0;
 };
+
+/// What the bag holds.
+struct Summary
+{
+  std::map<std::string, Counts> per_class;
+  std::map<std::uint32_t, TrackSummary> tracks;
+  std::map<std::size_t, std::size_t> frames_with_n_objects;
+  std::size_t frames = 0;
+  std::size_t images = 0;
+};
+
+/// Counts the objects of one message into `summary`.
+void addObjects(const grid_vision_fusion::DetectedObjectArray& objects, Summary& summary)
+{
+  using grid_vision_fusion::DetectedObject;
+  ++summary.frames;
+  ++summary.frames_with_n_objects[objects.objects.size()];
+  const double stamp_s = objects.header.stamp.toSec();
+  for (const DetectedObject& o : objects.objects)
+  {
+    const auto [entry, created] = summary.tracks.try_emplace(o.id);
+    TrackSummary& track = entry->second;
+    if (created)
+    {
+      track.label = o.label;
+      track.first_s = stamp_s;
+    }
+    else if (o.motion != track.last_motion)
+    {
+      ++track.motion_changes;
+    }
+    track.last_s = stamp_s;
+    track.last_motion = o.motion;
+    for (Counts* c : {&summary.per_class[o.label], &track.counts})
+    {
+      ++c->by_motion[std::min<std::size_t>(o.motion, 2)];
+      if (o.motion == DetectedObject::MOTION_DYNAMIC)
+      {
+        c->dynamic_speed_sum += std::hypot(o.velocity.x, o.velocity.y);
+      }
+    }
+  }
+}
+
+/// The overlay images as PNG frames and an MJPG video, written under temporary names and moved
+/// in place by commit(), so that a failure leaves no partial output behind.
+class OverlayExport
+{
+public:
+  explicit OverlayExport(const Options& o) : frames_dir_(o.frames_dir), video_path_(o.video)
+  {
+    if (!frames_dir_.empty())
+    {
+      frames_out_.emplace(frames_dir_);
+      std::filesystem::create_directories(frames_out_->temporary());
+    }
+    if (!video_path_.empty())
+    {
+      video_out_.emplace(video_path_, ".tmp.avi");
+    }
+  }
+
+  bool wanted() const { return frames_out_ || video_out_; }
+
+  /// Writes overlay image number `index`. @throws ExportError
+  void write(const sensor_msgs::Image::ConstPtr& image, std::size_t index)
+  {
+    const cv::Mat bgr = cv_bridge::toCvCopy(image, sensor_msgs::image_encodings::BGR8)->image;
+    if (frames_out_)
+    {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06zu.png", index);
+      const std::string path = (std::filesystem::path(frames_out_->temporary()) / name).string();
+      if (!cv::imwrite(path, bgr))
+      {
+        throw ExportError("cannot write " + path);
+      }
+    }
+    if (video_out_)
+    {
+      if (!video_.isOpened() && !video_.open(video_out_->temporary(),
+                                             cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, bgr.size()))
+      {
+        throw ExportError("cannot open the video " + video_path_ + " for writing");
+      }
+      video_.write(bgr);
+    }
+  }
+
+  /// Moves the frames and the video to their final names.
+  void commit()
+  {
+    if (frames_out_)
+    {
+      frames_out_->commit();
+    }
+    if (video_out_ && video_.isOpened())
+    {
+      video_.release();
+      video_out_->commit();
+    }
+  }
+
+private:
+  std::string frames_dir_, video_path_;
+  std::optional<grid_vision_fusion::TemporaryOutput> frames_out_, video_out_;
+  cv::VideoWriter video_;
+};
+
+/// Reads the bag, exporting its overlay images on the way.
+Summary readBag(const Options& o, OverlayExport& overlays)
+{
+  rosbag::Bag bag(o.bag, rosbag::bagmode::Read);
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{o.objects_topic, o.images_topic}));
+  Summary summary;
+  grid_vision_fusion::ProgressBar bar(std::cerr, view.size(), "messages", isatty(STDERR_FILENO) != 0);
+  std::size_t done = 0;
+  for (const rosbag::MessageInstance& m : view)
+  {
+    bar.update(++done);
+    if (const auto objects = m.instantiate<grid_vision_fusion::DetectedObjectArray>())
+    {
+      addObjects(*objects, summary);
+    }
+    else if (const auto image = m.instantiate<sensor_msgs::Image>())
+    {
+      if (overlays.wanted())
+      {
+        overlays.write(image, summary.images);
+        ++summary.images;
+      }
+    }
+  }
+  bar.finish();
+  return summary;
+}
+
+/// The mean speed of the dynamic objects of `c` ("-" without any), 5 characters at most.
+std::string meanDynamicSpeed(const Counts& c)
+{
+  return c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5) : "-";
+}
+
+void printSummary(const Summary& summary, const Options& o)
+{
+  std::cout << "\n"
+            << summary.frames << " frames of " << o.objects_topic << ", " << summary.images
+            << " overlay images of " << o.images_topic << "\n\nobjects per frame:\n";
+  for (const auto& [count, n] : summary.frames_with_n_objects)
+  {
+    std::cout << "  " << count << " object(s): " << n << " frame(s)\n";
+  }
+  std::cout << "\nclass          static  dynamic  unknown  mean speed of dynamic [m/s]\n";
+  for (const auto& [label, c] : summary.per_class)
+  {
+    char line[160];
+    std::snprintf(line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1],
+                  c.by_motion[2], c.by_motion[0], meanDynamicSpeed(c).c_str());
+    std::cout << line;
+  }
+  std::cout
+      << "\n"
+      << summary.tracks.size()
+      << " tracks (objects by id; with tracking off the id is the index in the array)\n"
+      << "id       label        frames  first [s]     last [s]   static  dynamic  unknown  changes  mean "
+         "speed of dynamic [m/s]\n";
+  for (const auto& [id, t] : summary.tracks)
+  {
+    const std::size_t frames_seen = t.counts.by_motion[0] + t.counts.by_motion[1] + t.counts.by_motion[2];
+    char line[200];
+    std::snprintf(line, sizeof(line), "%-8u %-12s %6zu %10.3f %12.3f %8zu %8zu %8zu %8zu  %s\n", id,
+                  t.label.c_str(), frames_seen, t.first_s, t.last_s, t.counts.by_motion[1],
+                  t.counts.by_motion[2], t.counts.by_motion[0], t.motion_changes,
+                  meanDynamicSpeed(t.counts).c_str());
+    std::cout << line;
+  }
+}
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  using grid_vision_fusion::DetectedObject;
-  using grid_vision_fusion::DetectedObjectArray;
-  std::string bag_path, objects_topic = "/objects", images_topic = "/objects/image", frames_dir, video_path;
-  for (int i = 1; i < argc; ++i)
+  Options o;
+  try
   {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help")
+    if (!parseArguments(argc, argv, o))
     {
       std::cout << kUsage;
       return 0;
     }
-    if (i + 1 >= argc)
-    {
-      return fail("option " + arg + " needs a value (or is unknown)\n\n" + kUsage);
-    }
-    const std::string value = argv[++i];
-    if (arg == "--bag")
-    {
-      bag_path = value;
-    }
-    else if (arg == "--objects")
-    {
-      objects_topic = value;
-    }
-    else if (arg == "--images")
-    {
-      images_topic = value;
-    }
-    else if (arg == "--frames-dir")
-    {
-      frames_dir = value;
-    }
-    else if (arg == "--video")
-    {
-      video_path = value;
-    }
-    else
-    {
-      return fail("unknown option " + arg + "\n\n" + kUsage);
-    }
   }
-  if (bag_path.empty())
+  catch (const grid_vision_fusion::UsageError& e)
   {
-    return fail(std::string("--bag is required\n\n") + kUsage);
+    return grid_vision_fusion::usageFailure("bag_summary", e.what(), kUsage, kExitFailure);
   }
   try
   {
-    rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
-    rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{objects_topic, images_topic}));
-    // The frames and the video are written under temporary names and moved in place at the end,
-    // so that a failure leaves no partial output behind.
-    std::optional<grid_vision_fusion::TemporaryOutput> frames_out, video_out;
-    if (!frames_dir.empty())
+    OverlayExport overlays(o);
+    const Summary summary = readBag(o, overlays);
+    if (summary.frames == 0)
     {
-      frames_out.emplace(frames_dir);
-      std::filesystem::create_directories(frames_out->temporary());
+      return fail("no " + o.objects_topic + " message in " + o.bag);
     }
-    if (!video_path.empty())
-    {
-      video_out.emplace(video_path, ".tmp.avi");
-    }
-    std::map<std::string, Counts> per_class;
-    std::map<std::uint32_t, TrackSummary> tracks;
-    std::map<std::size_t, std::size_t> frames_with_n_objects;
-    std::size_t frames = 0, images = 0;
-    cv::VideoWriter video;
-    grid_vision_fusion::ProgressBar bar(std::cerr, view.size(), "messages", isatty(STDERR_FILENO) != 0);
-    std::size_t done = 0;
-    for (const rosbag::MessageInstance& m : view)
-    {
-      bar.update(++done);
-      if (const auto objects = m.instantiate<DetectedObjectArray>())
-      {
-        ++frames;
-        ++frames_with_n_objects[objects->objects.size()];
-        const double stamp_s = objects->header.stamp.toSec();
-        for (const DetectedObject& o : objects->objects)
-        {
-          const auto [entry, created] = tracks.try_emplace(o.id);
-          TrackSummary& track = entry->second;
-          if (created)
-          {
-            track.label = o.label;
-            track.first_s = stamp_s;
-          }
-          else if (o.motion != track.last_motion)
-          {
-            ++track.motion_changes;
-          }
-          track.last_s = stamp_s;
-          track.last_motion = o.motion;
-          for (Counts* c : {&per_class[o.label], &track.counts})
-          {
-            ++c->by_motion[std::min<std::size_t>(o.motion, 2)];
-            if (o.motion == DetectedObject::MOTION_DYNAMIC)
-            {
-              c->dynamic_speed_sum += std::hypot(o.velocity.x, o.velocity.y);
-            }
-          }
-        }
-      }
-      else if (const auto image = m.instantiate<sensor_msgs::Image>())
-      {
-        if (frames_dir.empty() && video_path.empty())
-        {
-          continue;
-        }
-        const cv::Mat bgr = cv_bridge::toCvCopy(image, sensor_msgs::image_encodings::BGR8)->image;
-        if (!frames_dir.empty())
-        {
-          char name[32];
-          std::snprintf(name, sizeof(name), "%06zu.png", images);
-          const std::string path = (std::filesystem::path(frames_out->temporary()) / name).string();
-          if (!cv::imwrite(path, bgr))
-          {
-            return fail("cannot write " + path);
-          }
-        }
-        if (!video_path.empty())
-        {
-          if (!video.isOpened() && !video.open(video_out->temporary(),
-                                               cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, bgr.size()))
-          {
-            return fail("cannot open the video " + video_path + " for writing");
-          }
-          video.write(bgr);
-        }
-        ++images;
-      }
-    }
-    bar.finish();
-    if (frames == 0)
-    {
-      return fail("no " + objects_topic + " message in " + bag_path);
-    }
-    if (frames_out)
-    {
-      frames_out->commit();
-    }
-    if (video_out && video.isOpened())
-    {
-      video.release();
-      video_out->commit();
-    }
-    std::cout << "\n"
-              << frames << " frames of " << objects_topic << ", " << images << " overlay images of "
-              << images_topic << "\n\nobjects per frame:\n";
-    for (const auto& [count, n] : frames_with_n_objects)
-    {
-      std::cout << "  " << count << " object(s): " << n << " frame(s)\n";
-    }
-    std::cout << "\nclass          static  dynamic  unknown  mean speed of dynamic [m/s]\n";
-    for (const auto& [label, c] : per_class)
-    {
-      char line[160];
-      std::snprintf(
-          line, sizeof(line), "%-12s %8zu %8zu %8zu  %s\n", label.c_str(), c.by_motion[1], c.by_motion[2],
-          c.by_motion[0],
-          c.by_motion[2] ? std::to_string(c.dynamic_speed_sum / c.by_motion[2]).substr(0, 5).c_str() : "-");
-      std::cout << line;
-    }
-    std::cout
-        << "\n"
-        << tracks.size() << " tracks (objects by id; with tracking off the id is the index in the array)\n"
-        << "id       label        frames  first [s]     last [s]   static  dynamic  unknown  changes  mean "
-           "speed of dynamic [m/s]\n";
-    for (const auto& [id, t] : tracks)
-    {
-      const std::size_t frames_seen = t.counts.by_motion[0] + t.counts.by_motion[1] + t.counts.by_motion[2];
-      char line[200];
-      std::snprintf(
-          line, sizeof(line), "%-8u %-12s %6zu %10.3f %12.3f %8zu %8zu %8zu %8zu  %s\n", id, t.label.c_str(),
-          frames_seen, t.first_s, t.last_s, t.counts.by_motion[1], t.counts.by_motion[2],
-          t.counts.by_motion[0], t.motion_changes,
-          t.counts.by_motion[2]
-              ? std::to_string(t.counts.dynamic_speed_sum / t.counts.by_motion[2]).substr(0, 5).c_str()
-              : "-");
-      std::cout << line;
-    }
+    overlays.commit();
+    printSummary(summary, o);
+  }
+  catch (const ExportError& e)
+  {
+    return fail(e.what());
   }
   catch (const rosbag::BagException& e)
   {
-    return fail(grid_vision_fusion::bagReadError(bag_path, e.what()));
+    return fail(grid_vision_fusion::bagReadError(o.bag, e.what()));
   }
   catch (const std::exception& e)
   {
-    return fail(bag_path + ": " + e.what());
+    return fail(o.bag + ": " + e.what());
   }
   return 0;
 }

@@ -18,10 +18,12 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/cli/model_options.h"
 #include "grid_vision_fusion/cli/package_path.h"
@@ -76,10 +78,7 @@ any other name with spaces as '_'. Exit status: 0 every image done; 1 an error n
 file written for them, the others done); 2 a usage error.
 )";
 
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using gvf::UsageError;
 
 struct Options
 {
@@ -105,21 +104,14 @@ cv::Size parseInputSize(const std::string& text)
   return {width, height};
 }
 
-double parseFraction(const std::string& option, const std::string& text)
+/// `value` of `option` if it lies in [0, 1]. @throws UsageError
+double checkFraction(const std::string& option, double value)
 {
-  std::size_t used = 0;
-  double value = -1.0;
-  try
+  if (!(value >= 0.0 && value <= 1.0))
   {
-    value = std::stod(text, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (text.empty() || used != text.size() || !(value >= 0.0 && value <= 1.0))
-  {
-    throw UsageError(option + " wants a number in [0, 1], got \"" + text + "\"");
+    std::ostringstream text;
+    text << value;
+    throw UsageError(option + " wants a number in [0, 1], got " + text.str());
   }
   return value;
 }
@@ -143,57 +135,10 @@ std::map<std::string, std::string> parseClassMap(const std::string& text)
   return map;
 }
 
-/// Parses the command line; false when --help was asked for.
-bool parseArguments(int argc, char** argv, Options& o)
+/// The checks of the options together: required ones, the model files, exclusions.
+/// @throws UsageError
+void checkArguments(Options& o)
 {
-  bool options_ended = false;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    if (options_ended || arg.empty() || arg[0] != '-')
-    {
-      o.images.push_back(arg);
-      continue;
-    }
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-      {
-        throw UsageError(arg + " needs a value");
-      }
-      return argv[++i];
-    };
-    if (arg == "-h" || arg == "--help")
-      return false;
-    else if (arg == "--")
-      options_ended = true;
-    else if (arg == "--overlay")
-      o.overlay = true;
-    else if (arg == "-q" || arg == "--quiet")
-      o.quiet = true;
-    else if (arg == "--all-classes")
-      o.all_classes = true;
-    else if (arg == "--model")
-      o.model = value();
-    else if (arg == "--weights")
-      o.weights = value();
-    else if (arg == "--class-names")
-      o.class_names = value();
-    else if (arg == "--config")
-      o.config = value();
-    else if (arg == "--output")
-      o.output = value();
-    else if (arg == "--input")
-      o.input = parseInputSize(value());
-    else if (arg == "--score-threshold")
-      o.score_threshold = parseFraction(arg, value());
-    else if (arg == "--nms")
-      o.nms = parseFraction(arg, value());
-    else if (arg == "--class-map")
-      o.class_map = parseClassMap(value());
-    else
-      throw UsageError("unknown option " + arg);
-  }
   if (o.model.empty())
   {
     throw UsageError("--model is required");
@@ -222,6 +167,50 @@ bool parseArguments(int argc, char** argv, Options& o)
   {
     o.class_map.emplace();
   }
+}
+
+/// Parses the command line; false when --help was asked for.
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  namespace po = boost::program_options;
+  bool help = false;
+  po::options_description options;
+  options.add_options()                                 //
+      ("model", po::value(&o.model))                    //
+      ("weights", po::value(&o.weights))                //
+      ("class-names", po::value(&o.class_names))        //
+      ("config", po::value(&o.config))                  //
+      ("input", po::value<std::string>())               //
+      ("score-threshold", po::value<double>())          //
+      ("nms", po::value<double>())                      //
+      ("class-map", po::value<std::string>())           //
+      ("all-classes", po::bool_switch(&o.all_classes))  //
+      ("output", po::value(&o.output))                  //
+      ("overlay", po::bool_switch(&o.overlay))          //
+      ("quiet,q", po::bool_switch(&o.quiet))            //
+      ("help,h", po::bool_switch(&help));
+  const po::variables_map given = gvf::parseCommandLine(argc, argv, options, &o.images);
+  if (help)
+  {
+    return false;
+  }
+  if (given.count("input"))
+  {
+    o.input = parseInputSize(given["input"].as<std::string>());
+  }
+  if (given.count("score-threshold"))
+  {
+    o.score_threshold = checkFraction("--score-threshold", given["score-threshold"].as<double>());
+  }
+  if (given.count("nms"))
+  {
+    o.nms = checkFraction("--nms", given["nms"].as<double>());
+  }
+  if (given.count("class-map"))
+  {
+    o.class_map = parseClassMap(given["class-map"].as<std::string>());
+  }
+  checkArguments(o);
   return true;
 }
 
@@ -525,8 +514,7 @@ int main(int argc, char** argv)
   }
   catch (const UsageError& e)
   {
-    std::cerr << "detect: " << e.what() << "\n\n" << kUsage;
-    return kExitUsage;
+    return gvf::usageFailure("detect", e.what(), kUsage, kExitUsage);
   }
   catch (const std::exception& e)
   {

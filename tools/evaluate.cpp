@@ -9,10 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -22,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/cli/temporary_output.h"
 #include "grid_vision_fusion/evaluation/evaluation.h"
@@ -79,38 +77,7 @@ struct Options
   bool all_frames = false;
 };
 
-class UsageError : public std::runtime_error
-{
-public:
-  using std::runtime_error::runtime_error;
-};
-
-double toNumber(const std::string& option, const std::string& text)
-{
-  try
-  {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size())
-    {
-      return value;
-    }
-  }
-  catch (const std::exception&)
-  {
-  }
-  throw UsageError(option + " expects a number, got '" + text + "'");
-}
-
-int toInteger(const std::string& option, const std::string& text)
-{
-  const double value = toNumber(option, text);
-  if (value != std::floor(value) || std::abs(value) > 1e6)
-  {
-    throw UsageError(option + " expects an integer, got '" + text + "'");
-  }
-  return static_cast<int>(value);
-}
+using gvf::UsageError;
 
 std::vector<std::string> splitComma(const std::string& text)
 {
@@ -126,79 +93,88 @@ std::vector<std::string> splitComma(const std::string& text)
   return parts;
 }
 
-Options parseArguments(int argc, char** argv)
+/// --map from=to,...: adds the renamings to `class_map`.
+void parseClassMap(const std::string& text, std::map<std::string, std::string>& class_map)
 {
-  Options o;
-  std::vector<std::string> keep_only;
-  // Options with a value: name → what to do with it.
-  const std::map<std::string, std::function<void(const std::string&, const std::string&)>> with_value{
-      {"--drive", [&](const std::string&, const std::string& v) { o.drive = v; }},
-      {"--calibration", [&](const std::string&, const std::string& v) { o.calibration = v; }},
-      {"--labels", [&](const std::string&, const std::string& v) { o.labels = v; }},
-      {"--tracking-labels", [&](const std::string&, const std::string& v) { o.tracking_labels = v; }},
-      {"--detections", [&](const std::string&, const std::string& v) { o.detections = v; }},
-      {"--output", [&](const std::string&, const std::string& v) { o.output = v; }},
-      {"--topic", [&](const std::string&, const std::string& v) { o.bag.topic = v; }},
-      {"--world-frame", [&](const std::string&, const std::string& v) { o.bag.world_frame = v; }},
-      {"--odom-frame", [&](const std::string&, const std::string& v) { o.bag.odom_frame = v; }},
-      {"--stamp-tolerance",
-       [&](const std::string& n, const std::string& v) { o.bag.stamp_tolerance_s = toNumber(n, v); }},
-      {"--max-range",
-       [&](const std::string& n, const std::string& v) { o.evaluation.max_longitudinal_m = toNumber(n, v); }},
-      {"--iou",
-       [&](const std::string& n, const std::string& v) { o.evaluation.iou_threshold = toNumber(n, v); }},
-      {"--dynamic-speed",
-       [&](const std::string& n, const std::string& v) { o.truth.dynamic_speed_mps = toNumber(n, v); }},
-      {"--speed-window",
-       [&](const std::string& n, const std::string& v) { o.truth.speed_window_s = toNumber(n, v); }},
-      {"--max-truncation",
-       [&](const std::string& n, const std::string& v) { o.truth.max_truncation = toNumber(n, v); }},
-      {"--difficult-occlusion",
-       [&](const std::string& n, const std::string& v) { o.truth.difficult_occlusion = toInteger(n, v); }},
-      {"--classes", [&](const std::string&, const std::string& v) { keep_only = splitComma(v); }},
-      {"--map",
-       [&](const std::string&, const std::string& v)
-       {
-         for (const std::string& pair : splitComma(v))
-         {
-           const auto eq = pair.find('=');
-           if (eq == std::string::npos || eq == 0)
-           {
-             throw UsageError("--map expects from=to pairs, got '" + pair + "'");
-           }
-           o.truth.class_map[pair.substr(0, eq)] = pair.substr(eq + 1);
-         }
-       }},
-  };
-  for (int i = 1; i < argc; ++i)
+  for (const std::string& pair : splitComma(text))
   {
-    const std::string arg = argv[i];
-    const auto option = with_value.find(arg);
-    if (arg == "-h" || arg == "--help")
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos || eq == 0)
     {
-      std::cout << kUsage;
-      std::exit(0);
+      throw UsageError("--map expects from=to pairs, got '" + pair + "'");
     }
-    else if (arg == "--no-motion-classes")
+    class_map[pair.substr(0, eq)] = pair.substr(eq + 1);
+  }
+}
+
+/// --classes a,b,...: keeps the listed classes (after renaming), every other class is dropped.
+void keepOnly(const std::vector<std::string>& classes, gvf::KittiGroundTruthConfig& truth)
+{
+  if (classes.empty())
+  {
+    return;
+  }
+  truth.keep_unmapped = false;
+  const std::set<std::string> keep(classes.begin(), classes.end());
+  for (auto& [from, to] : truth.class_map)
+  {
+    if (!keep.count(to))
     {
-      o.evaluation.motion_classes = false;
+      to.clear();
     }
-    else if (arg == "--all-frames")
-    {
-      o.all_frames = true;
-    }
-    else if (option != with_value.end())
-    {
-      if (i + 1 >= argc)
-      {
-        throw UsageError(arg + " expects a value");
-      }
-      option->second(arg, argv[++i]);
-    }
-    else
-    {
-      throw UsageError("unknown argument '" + arg + "'");
-    }
+  }
+  for (const std::string& name : keep)
+  {
+    truth.class_map.emplace(name, name);
+  }
+}
+
+/// The options of the command line, bound to the fields of `o` where a value goes as it is.
+boost::program_options::options_description describeOptions(Options& o)
+{
+  namespace po = boost::program_options;
+  po::options_description options;
+  options.add_options()                                                 //
+      ("drive", po::value(&o.drive))                                    //
+      ("detections", po::value(&o.detections))                          //
+      ("output", po::value(&o.output))                                  //
+      ("calibration", po::value(&o.calibration))                        //
+      ("tracking-labels", po::value(&o.tracking_labels))                //
+      ("labels", po::value(&o.labels))                                  //
+      ("topic", po::value(&o.bag.topic))                                //
+      ("world-frame", po::value(&o.bag.world_frame))                    //
+      ("odom-frame", po::value(&o.bag.odom_frame))                      //
+      ("stamp-tolerance", po::value(&o.bag.stamp_tolerance_s))          //
+      ("max-range", po::value(&o.evaluation.max_longitudinal_m))        //
+      ("iou", po::value(&o.evaluation.iou_threshold))                   //
+      ("dynamic-speed", po::value(&o.truth.dynamic_speed_mps))          //
+      ("speed-window", po::value(&o.truth.speed_window_s))              //
+      ("max-truncation", po::value(&o.truth.max_truncation))            //
+      ("difficult-occlusion", po::value(&o.truth.difficult_occlusion))  //
+      ("classes", po::value<std::string>())                             //
+      ("map", po::value<std::string>())                                 //
+      ("no-motion-classes", po::bool_switch())                          //
+      ("all-frames", po::bool_switch(&o.all_frames))                    //
+      ("help,h", po::bool_switch());
+  return options;
+}
+
+/// Reads the command line into `o`; false when --help was asked for. @throws UsageError
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  const boost::program_options::variables_map given = gvf::parseCommandLine(argc, argv, describeOptions(o));
+  if (given["help"].as<bool>())
+  {
+    return false;
+  }
+  o.evaluation.motion_classes = !given["no-motion-classes"].as<bool>();
+  if (given.count("map"))
+  {
+    parseClassMap(given["map"].as<std::string>(), o.truth.class_map);
+  }
+  if (given.count("classes"))
+  {
+    keepOnly(splitComma(given["classes"].as<std::string>()), o.truth);
   }
   if (o.drive.empty() || o.detections.empty() || o.output.empty())
   {
@@ -207,23 +183,6 @@ Options parseArguments(int argc, char** argv)
   if (!o.labels.empty() && !o.tracking_labels.empty())
   {
     throw UsageError("--labels and --tracking-labels are two sources of ground truth: give one");
-  }
-  if (!keep_only.empty())
-  {
-    // Keep the listed classes (after renaming): every other class is dropped.
-    o.truth.keep_unmapped = false;
-    const std::set<std::string> keep(keep_only.begin(), keep_only.end());
-    for (auto it = o.truth.class_map.begin(); it != o.truth.class_map.end(); ++it)
-    {
-      if (!keep.count(it->second))
-      {
-        it->second.clear();
-      }
-    }
-    for (const std::string& name : keep)
-    {
-      o.truth.class_map.emplace(name, name);
-    }
   }
   try
   {
@@ -235,7 +194,7 @@ Options parseArguments(int argc, char** argv)
   {
     throw UsageError(e.what());
   }
-  return o;
+  return true;
 }
 
 /// Where the ground truth comes from, in words.
@@ -272,10 +231,10 @@ std::vector<gvf::GroundTruthObject> readGroundTruth(const Options& o, const gvf:
   return std::move(truth.objects);
 }
 
-int run(const Options& o)
+/// @throws std::runtime_error when the ground truth should come from the drive's tracklets but it
+///         has none, saying which other source to give.
+void checkTrackletsExist(const Options& o)
 {
-  const bool tty = isatty(STDERR_FILENO) != 0;
-  std::cerr << "Reading the drive " << o.drive << "\n";
   const bool tracklets = o.labels.empty() && o.tracking_labels.empty();
   if (tracklets && std::filesystem::is_directory(o.drive) &&
       !std::filesystem::exists(o.drive + "/tracklet_labels.xml"))
@@ -287,41 +246,45 @@ int run(const Options& o)
         (std::filesystem::is_directory(label_2) ? ", e.g. --labels " + label_2 : std::string()) +
         ") or --tracking-labels FILE (a KITTI tracking sequence's label_02 file)");
   }
-  const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, tracklets);
-  std::vector<gvf::GroundTruthObject> truth = readGroundTruth(o, drive);
-  const auto regions = static_cast<std::size_t>(std::count_if(
-      truth.begin(), truth.end(), [](const gvf::GroundTruthObject& g) { return g.object.dont_care; }));
-  std::cerr << "Ground truth: " << truth.size() - regions << " objects"
-            << (regions ? " and " + std::to_string(regions) + " DontCare regions" : std::string()) << " in "
-            << drive.frameCount() << " frames from " << truthSource(o) << "\n";
+}
 
+/// The detections of the bag, with a progress bar on stderr.
+gvf::DetectionBagResult readDetections(const Options& o, const gvf::KittiDrive& drive)
+{
+  const bool tty = isatty(STDERR_FILENO) != 0;
   std::size_t bar_total = 0;
   std::unique_ptr<gvf::ProgressBar> progress;
-  const gvf::DetectionBagResult bag = gvf::readDetectionBag(o.detections, drive, o.bag, o.truth,
-                                                            [&](std::size_t done, std::size_t total)
-                                                            {
-                                                              if (!progress || total != bar_total)
-                                                              {
-                                                                bar_total = total;
-                                                                progress = std::make_unique<gvf::ProgressBar>(
-                                                                    std::cerr, total, "detections", tty);
-                                                              }
-                                                              progress->update(done);
-                                                            });
+  gvf::DetectionBagResult bag = gvf::readDetectionBag(o.detections, drive, o.bag, o.truth,
+                                                      [&](std::size_t done, std::size_t total)
+                                                      {
+                                                        if (!progress || total != bar_total)
+                                                        {
+                                                          bar_total = total;
+                                                          progress = std::make_unique<gvf::ProgressBar>(
+                                                              std::cerr, total, "detections", tty);
+                                                        }
+                                                        progress->update(done);
+                                                      });
   if (progress)
   {
     progress->finish();
   }
-  const gvf::DetectionBagStats& s = bag.stats;
   std::cerr << "Detections: " << bag.detections.size() << " objects in " << bag.frames.size()
-            << " frames from " << s.messages << " messages on " << o.bag.topic << "\n";
+            << " frames from " << bag.stats.messages << " messages on " << o.bag.topic << "\n";
   if (bag.frames.empty())
   {
-    throw std::runtime_error("none of the " + std::to_string(s.messages) + " messages on " + o.bag.topic +
-                             " of " + o.detections + " lies within " +
+    throw std::runtime_error("none of the " + std::to_string(bag.stats.messages) + " messages on " +
+                             o.bag.topic + " of " + o.detections + " lies within " +
                              std::to_string(o.bag.stamp_tolerance_s) + " s of a time stamp of " + o.drive +
                              "/image_02/timestamps.txt: is the bag from this drive?");
   }
+  return bag;
+}
+
+/// Warns on stderr about what of the bag is left out or looks wrong.
+void warnAboutDetections(const Options& o, const gvf::DetectionBagResult& bag)
+{
+  const gvf::DetectionBagStats& s = bag.stats;
   if (bag.detections.empty())
   {
     std::cerr
@@ -350,21 +313,33 @@ int run(const Options& o)
     std::cerr << "warning: " << s.invalid_objects
               << " objects with a non-finite or inverted box, score or position left out\n";
   }
-  if (!o.all_frames)
-  {
-    const std::size_t before = truth.size();
-    truth.erase(
-        std::remove_if(truth.begin(), truth.end(),
-                       [&](const gvf::GroundTruthObject& g) { return !bag.frames.count(g.frame_index); }),
-        truth.end());
-    if (truth.size() != before)
-    {
-      std::cerr << "Left out " << before - truth.size() << " ground-truth objects of the "
-                << drive.frameCount() - static_cast<int>(bag.frames.size())
-                << " frames without a detection message (--all-frames counts them)\n";
-    }
-  }
+}
 
+/// Without --all-frames: leaves out the ground truth of the frames the bag does not cover.
+void leaveOutUncoveredFrames(const Options& o, const gvf::KittiDrive& drive,
+                             const gvf::DetectionBagResult& bag, std::vector<gvf::GroundTruthObject>& truth)
+{
+  if (o.all_frames)
+  {
+    return;
+  }
+  const std::size_t before = truth.size();
+  truth.erase(
+      std::remove_if(truth.begin(), truth.end(),
+                     [&](const gvf::GroundTruthObject& g) { return !bag.frames.count(g.frame_index); }),
+      truth.end());
+  if (truth.size() != before)
+  {
+    std::cerr << "Left out " << before - truth.size() << " ground-truth objects of the "
+              << drive.frameCount() - static_cast<int>(bag.frames.size())
+              << " frames without a detection message (--all-frames counts them)\n";
+  }
+}
+
+/// Scores the detections, writes the outputs into o.output and the report to stdout.
+void evaluateAndWrite(const Options& o, const std::vector<gvf::GroundTruthObject>& truth,
+                      const gvf::DetectionBagResult& bag)
+{
   const std::vector<gvf::EvalObject> ground_truth = gvf::evalObjects(truth);
   gvf::EvaluationResult result = gvf::evaluate(ground_truth, bag.detections, o.evaluation);
   if (o.labels.empty())  // tracklets and tracking labels give the ground-truth identities
@@ -381,6 +356,24 @@ int run(const Options& o)
   std::cout << gvf::reportMarkdown(result, o.evaluation);
   std::cerr << "Wrote " << o.output
             << "/metrics.json, report.md, matches.csv, ground-truth/, detection-results/ and the plots\n";
+}
+
+int run(const Options& o)
+{
+  std::cerr << "Reading the drive " << o.drive << "\n";
+  checkTrackletsExist(o);
+  const bool tracklets = o.labels.empty() && o.tracking_labels.empty();
+  const gvf::KittiDrive drive = gvf::KittiDrive::read(o.drive, o.calibration, tracklets);
+  std::vector<gvf::GroundTruthObject> truth = readGroundTruth(o, drive);
+  const auto regions = static_cast<std::size_t>(std::count_if(
+      truth.begin(), truth.end(), [](const gvf::GroundTruthObject& g) { return g.object.dont_care; }));
+  std::cerr << "Ground truth: " << truth.size() - regions << " objects"
+            << (regions ? " and " + std::to_string(regions) + " DontCare regions" : std::string()) << " in "
+            << drive.frameCount() << " frames from " << truthSource(o) << "\n";
+  const gvf::DetectionBagResult bag = readDetections(o, drive);
+  warnAboutDetections(o, bag);
+  leaveOutUncoveredFrames(o, drive, bag, truth);
+  evaluateAndWrite(o, truth, bag);
   return 0;
 }
 }  // namespace
@@ -390,12 +383,15 @@ int main(int argc, char** argv)
   Options options;
   try
   {
-    options = parseArguments(argc, argv);
+    if (!parseArguments(argc, argv, options))
+    {
+      std::cout << kUsage;
+      return 0;
+    }
   }
   catch (const UsageError& e)
   {
-    std::cerr << "evaluate: " << e.what() << "\n\n" << kUsage;
-    return 2;
+    return gvf::usageFailure("evaluate", e.what(), kUsage, 2);
   }
   try
   {

@@ -1,5 +1,6 @@
 // kitti_to_bag: converts a KITTI raw synced drive into a ROS bag with kitti2bag's topic and frame
 // names and the camera model of the rectified images (see doc/tools/kitti_to_bag.md).
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/offline/kitti_bag_writer.h"
 
@@ -42,10 +43,7 @@ const char* const kUsage =
     "The bag is written as OUTPUT.bag.tmp and renamed when complete; an existing OUTPUT.bag is\n"
     "replaced. Exit status: 0 success, 1 conversion error, 2 usage error.\n";
 
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using grid_vision_fusion::UsageError;
 
 int parseFrame(const std::string& option, const std::string& text)
 {
@@ -89,54 +87,35 @@ std::vector<int> parseCameras(const std::string& text)
 /// Parses the command line; returns false when --help was asked for.
 bool parseArguments(int argc, char** argv, grid_vision_fusion::KittiBagOptions& options, bool& quiet)
 {
+  namespace po = boost::program_options;
+  std::string first, last, cameras;
+  bool help = false;
+  po::options_description described;
+  described.add_options()                               //
+      ("calib,c", po::value(&options.calibration_dir))  //
+      ("first,f", po::value(&first))                    //
+      ("last,l", po::value(&last))                      //
+      ("cameras", po::value(&cameras))                  //
+      ("compression", po::value(&options.compression))  //
+      ("quiet,q", po::bool_switch(&quiet))              //
+      ("help,h", po::bool_switch(&help));
   std::vector<std::string> positional;
-  for (int i = 1; i < argc; ++i)
+  const po::variables_map given = grid_vision_fusion::parseCommandLine(argc, argv, described, &positional);
+  if (help)
   {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-      {
-        throw UsageError(arg + " needs a value");
-      }
-      return argv[++i];
-    };
-    if (arg == "-h" || arg == "--help")
-    {
-      return false;
-    }
-    else if (arg == "-c" || arg == "--calib")
-    {
-      options.calibration_dir = value();
-    }
-    else if (arg == "-f" || arg == "--first")
-    {
-      options.first_frame = parseFrame(arg, value());
-    }
-    else if (arg == "-l" || arg == "--last")
-    {
-      options.last_frame = parseFrame(arg, value());
-    }
-    else if (arg == "--cameras")
-    {
-      options.cameras = parseCameras(value());
-    }
-    else if (arg == "--compression")
-    {
-      options.compression = value();
-    }
-    else if (arg == "-q" || arg == "--quiet")
-    {
-      quiet = true;
-    }
-    else if (arg.size() > 1 && arg[0] == '-')
-    {
-      throw UsageError("unknown option " + arg);
-    }
-    else
-    {
-      positional.push_back(arg);
-    }
+    return false;
+  }
+  if (given.count("first"))
+  {
+    options.first_frame = parseFrame("--first", first);
+  }
+  if (given.count("last"))
+  {
+    options.last_frame = parseFrame("--last", last);
+  }
+  if (given.count("cameras"))
+  {
+    options.cameras = parseCameras(cameras);
   }
   if (positional.size() != 2)
   {
@@ -172,8 +151,7 @@ int main(int argc, char** argv)
   }
   catch (const UsageError& e)
   {
-    std::cerr << "kitti_to_bag: " << e.what() << "\n\n" << kUsage;
-    return kExitUsage;
+    return grid_vision_fusion::usageFailure("kitti_to_bag", e.what(), kUsage, kExitUsage);
   }
 
   ros::Time::init();

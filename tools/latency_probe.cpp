@@ -19,6 +19,7 @@
 #include <string>
 
 #include "grid_vision_fusion/DetectedObjectArray.h"
+#include "grid_vision_fusion/cli/command_line.h"
 
 namespace
 {
@@ -35,6 +36,35 @@ const char* const kUsage =
     "  --objects TOPIC      DetectedObjectArray topic (default /objects)\n"
     "  -h, --help           this text\n";
 
+struct Options
+{
+  std::string output, camera_info_topic = "/kitti/camera_color_left/camera_info", objects_topic = "/objects";
+};
+
+/// Reads the command line (without the ROS arguments) into `o`; false when --help was asked for.
+/// @throws grid_vision_fusion::UsageError
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  namespace po = boost::program_options;
+  bool help = false;
+  po::options_description options;
+  options.add_options()                                 //
+      ("output", po::value(&o.output))                  //
+      ("camera-info", po::value(&o.camera_info_topic))  //
+      ("objects", po::value(&o.objects_topic))          //
+      ("help,h", po::bool_switch(&help));
+  grid_vision_fusion::parseCommandLine(argc, argv, options);
+  if (help)
+  {
+    return false;
+  }
+  if (o.output.empty())
+  {
+    throw grid_vision_fusion::UsageError("give --output FILE.csv");
+  }
+  return true;
+}
+
 std::uint64_t stampNs(const ros::Time& stamp)
 {
   return static_cast<std::uint64_t>(stamp.sec) * 1000000000ULL + stamp.nsec;
@@ -43,30 +73,22 @@ std::uint64_t stampNs(const ros::Time& stamp)
 
 int main(int argc, char** argv)
 {
+  // ros::init takes the ROS remapping arguments (name:=value) out of argv first.
   ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
-  std::string output, camera_info_topic = "/kitti/camera_color_left/camera_info", objects_topic = "/objects";
-  for (int i = 1; i < argc; ++i)
+  Options o;
+  try
   {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help")
+    if (!parseArguments(argc, argv, o))
     {
       std::cout << kUsage;
       return 0;
     }
-    if (i + 1 >= argc || (arg != "--output" && arg != "--camera-info" && arg != "--objects"))
-    {
-      std::cerr << "latency_probe: " << (i + 1 >= argc ? "missing the value of " : "unknown option ") << arg
-                << "\n\n"
-                << kUsage;
-      return 1;
-    }
-    (arg == "--output" ? output : arg == "--camera-info" ? camera_info_topic : objects_topic) = argv[++i];
   }
-  if (output.empty())
+  catch (const grid_vision_fusion::UsageError& e)
   {
-    std::cerr << "latency_probe: give --output FILE.csv\n\n" << kUsage;
-    return 1;
+    return grid_vision_fusion::usageFailure("latency_probe", e.what(), kUsage, 1);
   }
+  const std::string& output = o.output;
   std::FILE* out = std::fopen(output.c_str(), "w");
   if (out == nullptr)
   {
@@ -79,11 +101,11 @@ int main(int argc, char** argv)
   std::map<std::uint64_t, double> info_arrivals, objects_arrivals;  // stamp [ns] -> first arrival [s]
   ros::NodeHandle nh;
   const ros::Subscriber info_sub = nh.subscribe<sensor_msgs::CameraInfo>(
-      camera_info_topic, 1000,
+      o.camera_info_topic, 1000,
       [&](const sensor_msgs::CameraInfo::ConstPtr& msg)
       { info_arrivals.emplace(stampNs(msg->header.stamp), (ros::WallTime::now() - start).toSec()); });
   const ros::Subscriber objects_sub = nh.subscribe<grid_vision_fusion::DetectedObjectArray>(
-      objects_topic, 1000,
+      o.objects_topic, 1000,
       [&](const grid_vision_fusion::DetectedObjectArray::ConstPtr& msg)
       { objects_arrivals.emplace(stampNs(msg->header.stamp), (ros::WallTime::now() - start).toSec()); });
   ros::spin();

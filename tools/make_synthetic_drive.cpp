@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/package_path.h"
 #include "grid_vision_fusion/cli/progress_bar.h"
 #include "grid_vision_fusion/simulation/synthetic_drive.h"
@@ -44,22 +45,6 @@ int fail(const std::string& message)
   return 1;
 }
 
-int parseInt(const std::string& option, const std::string& value)
-{
-  std::size_t used = 0;
-  try
-  {
-    const int parsed = std::stoi(value, &used);
-    if (used == value.size())
-    {
-      return parsed;
-    }
-  }
-  catch (const std::exception&)
-  {
-  }
-  throw std::invalid_argument(option + " needs an integer, got \"" + value + "\"");
-}
 /// The command line.
 struct Arguments
 {
@@ -67,67 +52,35 @@ struct Arguments
   std::string scenario_path;
   std::string recorded_drive;
   int seed = -1;
-  bool help = false;
 };
 
-/// Parses the options into `args`. Returns an error message ("" when fine).
-std::string parseArguments(int argc, char** argv, Arguments& args)
+/// Reads the command line into `args`; false when --help was asked for.
+/// @throws grid_vision_fusion::UsageError
+bool parseArguments(int argc, char** argv, Arguments& args)
 {
-  for (int i = 1; i < argc; ++i)
+  namespace po = boost::program_options;
+  bool help = false;
+  po::options_description options;
+  options.add_options()                                          //
+      ("output", po::value(&args.options.output_root))           //
+      ("scenario", po::value(&args.scenario_path))               //
+      ("calibration", po::value(&args.options.calibration_dir))  //
+      ("date", po::value(&args.options.date))                    //
+      ("drive", po::value(&args.options.drive_number))           //
+      ("frames", po::value(&args.options.max_frames))            //
+      ("seed", po::value(&args.seed))                            //
+      ("from-drive", po::value(&args.recorded_drive))            //
+      ("help,h", po::bool_switch(&help));
+  grid_vision_fusion::parseCommandLine(argc, argv, options);
+  if (help)
   {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help")
-    {
-      args.help = true;
-      return "";
-    }
-    if (i + 1 >= argc)
-    {
-      return "option " + arg + " needs a value (or is unknown)\n\n" + kUsage;
-    }
-    const std::string value = argv[++i];
-    if (arg == "--output")
-    {
-      args.options.output_root = value;
-    }
-    else if (arg == "--scenario")
-    {
-      args.scenario_path = value;
-    }
-    else if (arg == "--calibration")
-    {
-      args.options.calibration_dir = value;
-    }
-    else if (arg == "--date")
-    {
-      args.options.date = value;
-    }
-    else if (arg == "--drive")
-    {
-      args.options.drive_number = parseInt(arg, value);
-    }
-    else if (arg == "--frames")
-    {
-      args.options.max_frames = parseInt(arg, value);
-    }
-    else if (arg == "--seed")
-    {
-      args.seed = parseInt(arg, value);
-    }
-    else if (arg == "--from-drive")
-    {
-      args.recorded_drive = value;
-    }
-    else
-    {
-      return "unknown option " + arg + "\n\n" + kUsage;
-    }
+    return false;
   }
   if (args.options.output_root.empty())
   {
-    return std::string("--output is required\n\n") + kUsage;
+    throw grid_vision_fusion::UsageError("--output is required");
   }
-  return "";
+  return true;
 }
 
 /// The scenario of the command line: its file, or the recorded drive in the world of --scenario.
@@ -193,15 +146,17 @@ int main(int argc, char** argv)
   try
   {
     Arguments args;
-    const std::string error = parseArguments(argc, argv, args);
-    if (!error.empty())
+    try
     {
-      return fail(error);
+      if (!parseArguments(argc, argv, args))
+      {
+        std::cout << kUsage;
+        return 0;
+      }
     }
-    if (args.help)
+    catch (const UsageError& e)
     {
-      std::cout << kUsage;
-      return 0;
+      return usageFailure("make_synthetic_drive", e.what(), kUsage, 1);
     }
     const SyntheticScenario scenario = loadArgumentsScenario(args);
     const SyntheticDriveOptions& options = args.options;

@@ -10,11 +10,13 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "grid_vision_fusion/cli/command_line.h"
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/cli/model_options.h"
 #include "grid_vision_fusion/cli/package_path.h"
@@ -94,7 +96,7 @@ void parseTopics(const std::string& list, gvf::PipelineTopics& topics)
     const std::size_t eq = item.find('=');
     if (eq == std::string::npos || eq + 1 == item.size())
     {
-      throw std::invalid_argument("--topics: \"" + item + "\" is not NAME=TOPIC");
+      throw gvf::UsageError("--topics: \"" + item + "\" is not NAME=TOPIC");
     }
     const std::string name = item.substr(0, eq);
     const std::string topic = item.substr(eq + 1);
@@ -109,10 +111,62 @@ void parseTopics(const std::string& list, gvf::PipelineTopics& topics)
     else if (name == "tf_static")
       topics.tf_static = topic;
     else
-      throw std::invalid_argument("--topics: unknown input \"" + name +
-                                  "\" (points, image, camera_info, tf, tf_static)");
+      throw gvf::UsageError("--topics: unknown input \"" + name +
+                            "\" (points, image, camera_info, tf, tf_static)");
     begin = end + 1;
   }
+}
+
+/// Reads the command line into `o`; false when --help was asked for. @throws gvf::UsageError
+bool parseArguments(int argc, char** argv, Options& o)
+{
+  namespace po = boost::program_options;
+  bool help = false;
+  std::string topics;
+  po::options_description options;
+  options.add_options()                                           //
+      ("bag", po::value(&o.bag))                                  //
+      ("output", po::value(&o.output))                            //
+      ("config-dir", po::value(&o.config_dir))                    //
+      ("grid-config", po::value(&o.grid_config))                  //
+      ("detector-config", po::value(&o.detector_config))          //
+      ("projection-config", po::value(&o.projection_config))      //
+      ("fusion-config", po::value(&o.fusion_config))              //
+      ("param", po::value(&o.params))                             //
+      ("backend", po::value(&o.backend))                          //
+      ("model", po::value(&o.model))                              //
+      ("weights", po::value(&o.weights))                          //
+      ("class-names", po::value(&o.class_names))                  //
+      ("replay-directory", po::value(&o.replay_directory))        //
+      ("replay-file-pattern", po::value(&o.replay_file_pattern))  //
+      ("replay-frame-index", po::value(&o.replay_frame_index))    //
+      ("topics", po::value(&topics))                              //
+      ("max-tf-wait", po::value(&o.max_tf_wait))                  //
+      ("write-grids", po::bool_switch(&o.write_grids))            //
+      ("write-detections", po::bool_switch(&o.write_detections))  //
+      ("benchmark", po::bool_switch(&o.benchmark))                //
+      ("quiet,q", po::bool_switch(&o.quiet))                      //
+      ("help,h", po::bool_switch(&help));
+  const po::variables_map given = gvf::parseCommandLine(argc, argv, options);
+  if (help)
+  {
+    return false;
+  }
+  if (given.count("topics"))
+  {
+    parseTopics(topics, o.topics);
+  }
+  if (!(o.max_tf_wait >= 0.0))
+  {
+    std::ostringstream value;
+    value << o.max_tf_wait;
+    throw gvf::UsageError("--max-tf-wait needs seconds >= 0, got " + value.str());
+  }
+  if (o.bag.empty() || o.output.empty())
+  {
+    throw gvf::UsageError("--bag and --output are required");
+  }
+  return true;
 }
 
 double medianOf(std::vector<double> values)
@@ -150,7 +204,10 @@ void applyParam(const std::string& param, const std::map<std::string, gvf::YamlP
   node->second->set(param.substr(slash + 1, eq - slash - 1), typed);
 }
 
-int run(const Options& o)
+/// The configuration of the four stages: the YAML files, what the launch files set on top of
+/// them (yolo_detector.launch, kitti_replay.launch), then the --param options. Warns on stderr
+/// about unknown and ignored parameters.
+gvf::PipelineConfig pipelineConfig(const Options& o)
 {
   const std::string config_dir =
       o.config_dir.empty() ? gvf::packagePath("--config-dir") + "/config" : o.config_dir;
@@ -162,7 +219,6 @@ int run(const Options& o)
       o.projection_config.empty() ? config_dir + "/grid_projection.yaml" : o.projection_config);
   gvf::YamlParamSource fusion =
       gvf::YamlParamSource::fromFile(o.fusion_config.empty() ? config_dir + "/fusion.yaml" : o.fusion_config);
-  // What the launch files set on top of the YAML files (yolo_detector.launch, kitti_replay.launch).
   if (!o.backend.empty())
   {
     detector.set("backend", o.backend);
@@ -201,18 +257,12 @@ int run(const Options& o)
   {
     std::cerr << "run_pipeline: warning: " << warning << "\n";
   }
+  return config;
+}
 
-  // Written as OUTPUT.tmp, moved to OUTPUT when complete; removed on any failure.
-  gvf::TemporaryOutput output(o.output);
-  rosbag::Bag out;
-  try
-  {
-    out.open(output.temporary(), rosbag::bagmode::Write);
-  }
-  catch (const rosbag::BagException& e)
-  {
-    throw std::runtime_error("cannot write the output bag " + o.output + ": " + e.what());
-  }
+/// The outputs of the pipeline, written into `out`: /objects, and what the options add.
+gvf::PipelineOutputs outputsInto(rosbag::Bag& out, const Options& o)
+{
   gvf::PipelineOutputs outputs;
   outputs.objects = [&out](const gvf::DetectedObjectArray::ConstPtr& m)
   { out.write("/objects", m->header.stamp, m); };
@@ -227,14 +277,12 @@ int run(const Options& o)
     outputs.detections = [&out](const gvf::Detection2DArray::ConstPtr& m)
     { out.write("/detections", m->header.stamp, m); };
   }
-  gvf::Pipeline pipeline(config, outputs);
-  for (const std::string& warning : pipeline.detectorWarnings())
-  {
-    std::cerr << "run_pipeline: detector: " << warning << "\n";
-  }
-  std::cerr << "run_pipeline: " << o.bag << " -> " << o.output << " (detector " << config.detector.backend
-            << ")\n";
+  return outputs;
+}
 
+/// Runs `pipeline` over the bag, with a progress bar on stderr unless --quiet.
+gvf::BagRunSummary runWithProgress(gvf::Pipeline& pipeline, const Options& o)
+{
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::unique_ptr<gvf::ProgressBar> bar;
   const gvf::BagRunSummary summary =
@@ -255,17 +303,13 @@ int run(const Options& o)
   {
     bar->finish();
   }
-  try
-  {
-    out.close();
-  }
-  catch (const rosbag::BagException& e)
-  {
-    throw std::runtime_error("cannot finish the output bag " + o.output + ": " + e.what());
-  }
-  output.commit();
+  return summary;
+}
 
-  const gvf::PipelineStats& s = pipeline.stats();
+/// On stderr: the messages read and written, the drops and their reasons, and, when no object
+/// array came out, which input was missing.
+void printStats(const gvf::PipelineStats& s, const gvf::BagRunSummary& summary, const Options& o)
+{
   std::cerr << "run_pipeline: " << summary.messages_read << " messages, " << s.clouds << " clouds, "
             << s.images << " images, " << s.camera_infos << " camera_infos -> " << s.grids << " grids, "
             << s.projections << " projected grids, " << s.objects << " object arrays on /objects\n";
@@ -306,33 +350,77 @@ int run(const Options& o)
     }
     std::cerr << (s.warnings.empty() ? "\n" : "; the reasons above\n");
   }
+}
+
+/// --benchmark on stdout: the median time per frame of every stage, the total, the real-time
+/// factor and the memory.
+void printBenchmark(const gvf::PipelineStats& s, const gvf::BagRunSummary& summary,
+                    const std::string& backend)
+{
+  const double grid = medianOf(s.grid_ms);
+  const double det = medianOf(s.detector_ms);
+  const double proj = medianOf(s.projection_ms);
+  const double fus = medianOf(s.fusion_ms);
+  const double frames = static_cast<double>(std::max<std::size_t>(summary.frames, 1));
+  const double wall_per_frame = 1e3 * summary.wall_s / frames;
+  std::printf("benchmark on %s\n", gvf::machineInfo().describe().c_str());
+  std::printf("benchmark: %zu frames, bag %.1f s, wall %.1f s\n", summary.frames, summary.bag_duration_s,
+              summary.wall_s);
+  std::printf(
+      "  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
+      "fusion %.3f, sum %.2f\n",
+      grid, backend.c_str(), det, proj, fus, grid + det + proj + fus);
+  std::printf("  wall per frame (reading, all stages, writing): %.2f ms, %.1f frames/s, %.2fx real time\n",
+              wall_per_frame, 1e3 / wall_per_frame,
+              summary.wall_s > 0 ? summary.bag_duration_s / summary.wall_s : 0.0);
+  std::printf("  memory: peak %.1f MiB (getrusage)", gvf::peakResidentMemoryMiB());
+  if (summary.rss_mb.size() > 500)
+  {
+    const double at500 = summary.rss_mb[499];
+    const double end = summary.rss_mb.back();
+    std::printf(", resident at frame 500 %.1f MiB, at the end (frame %zu) %.1f MiB, growth %+.2f %%", at500,
+                summary.rss_mb.size(), end, 100.0 * (end - at500) / at500);
+  }
+  std::printf("\n");
+}
+
+int run(const Options& o)
+{
+  const gvf::PipelineConfig config = pipelineConfig(o);
+  // Written as OUTPUT.tmp, moved to OUTPUT when complete; removed on any failure.
+  gvf::TemporaryOutput output(o.output);
+  rosbag::Bag out;
+  try
+  {
+    out.open(output.temporary(), rosbag::bagmode::Write);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot write the output bag " + o.output + ": " + e.what());
+  }
+  gvf::Pipeline pipeline(config, outputsInto(out, o));
+  for (const std::string& warning : pipeline.detectorWarnings())
+  {
+    std::cerr << "run_pipeline: detector: " << warning << "\n";
+  }
+  std::cerr << "run_pipeline: " << o.bag << " -> " << o.output << " (detector " << config.detector.backend
+            << ")\n";
+  const gvf::BagRunSummary summary = runWithProgress(pipeline, o);
+  try
+  {
+    out.close();
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error("cannot finish the output bag " + o.output + ": " + e.what());
+  }
+  output.commit();
+
+  const gvf::PipelineStats& s = pipeline.stats();
+  printStats(s, summary, o);
   if (o.benchmark)
   {
-    const double grid = medianOf(s.grid_ms);
-    const double det = medianOf(s.detector_ms);
-    const double proj = medianOf(s.projection_ms);
-    const double fus = medianOf(s.fusion_ms);
-    const double frames = static_cast<double>(std::max<std::size_t>(summary.frames, 1));
-    const double wall_per_frame = 1e3 * summary.wall_s / frames;
-    std::printf("benchmark on %s\n", gvf::machineInfo().describe().c_str());
-    std::printf("benchmark: %zu frames, bag %.1f s, wall %.1f s\n", summary.frames, summary.bag_duration_s,
-                summary.wall_s);
-    std::printf(
-        "  median per frame [ms]: dynamic_grid %.2f, detector (%s) %.2f, grid_projection %.2f, "
-        "fusion %.3f, sum %.2f\n",
-        grid, config.detector.backend.c_str(), det, proj, fus, grid + det + proj + fus);
-    std::printf("  wall per frame (reading, all stages, writing): %.2f ms, %.1f frames/s, %.2fx real time\n",
-                wall_per_frame, 1e3 / wall_per_frame,
-                summary.wall_s > 0 ? summary.bag_duration_s / summary.wall_s : 0.0);
-    std::printf("  memory: peak %.1f MiB (getrusage)", gvf::peakResidentMemoryMiB());
-    if (summary.rss_mb.size() > 500)
-    {
-      const double at500 = summary.rss_mb[499];
-      const double end = summary.rss_mb.back();
-      std::printf(", resident at frame 500 %.1f MiB, at the end (frame %zu) %.1f MiB, growth %+.2f %%", at500,
-                  summary.rss_mb.size(), end, 100.0 * (end - at500) / at500);
-    }
-    std::printf("\n");
+    printBenchmark(s, summary, config.detector.backend);
   }
   return s.objects > 0 ? 0 : kExitNoObjects;
 }
@@ -343,92 +431,18 @@ int main(int argc, char** argv)
   Options o;
   try
   {
-    for (int i = 1; i < argc; ++i)
+    if (!parseArguments(argc, argv, o))
     {
-      const std::string arg = argv[i];
-      if (arg == "-h" || arg == "--help")
-      {
-        std::cout << kUsage;
-        return 0;
-      }
-      if (arg == "--write-grids")
-      {
-        o.write_grids = true;
-        continue;
-      }
-      if (arg == "--write-detections")
-      {
-        o.write_detections = true;
-        continue;
-      }
-      if (arg == "--benchmark")
-      {
-        o.benchmark = true;
-        continue;
-      }
-      if (arg == "-q" || arg == "--quiet")
-      {
-        o.quiet = true;
-        continue;
-      }
-      if (i + 1 >= argc)
-      {
-        std::cerr << "run_pipeline: option " << arg << " needs a value (or is unknown)\n\n" << kUsage;
-        return 1;
-      }
-      const std::string value = argv[++i];
-      if (arg == "--bag")
-        o.bag = value;
-      else if (arg == "--output")
-        o.output = value;
-      else if (arg == "--config-dir")
-        o.config_dir = value;
-      else if (arg == "--grid-config")
-        o.grid_config = value;
-      else if (arg == "--detector-config")
-        o.detector_config = value;
-      else if (arg == "--projection-config")
-        o.projection_config = value;
-      else if (arg == "--fusion-config")
-        o.fusion_config = value;
-      else if (arg == "--param")
-        o.params.push_back(value);
-      else if (arg == "--backend")
-        o.backend = value;
-      else if (arg == "--model")
-        o.model = value;
-      else if (arg == "--weights")
-        o.weights = value;
-      else if (arg == "--class-names")
-        o.class_names = value;
-      else if (arg == "--replay-directory")
-        o.replay_directory = value;
-      else if (arg == "--replay-file-pattern")
-        o.replay_file_pattern = value;
-      else if (arg == "--replay-frame-index")
-        o.replay_frame_index = value;
-      else if (arg == "--topics")
-        parseTopics(value, o.topics);
-      else if (arg == "--max-tf-wait")
-      {
-        std::size_t used = 0;
-        o.max_tf_wait = std::stod(value, &used);
-        if (used != value.size() || !(o.max_tf_wait >= 0.0))
-        {
-          throw std::invalid_argument("--max-tf-wait needs seconds >= 0, got \"" + value + "\"");
-        }
-      }
-      else
-      {
-        std::cerr << "run_pipeline: unknown option " << arg << "\n\n" << kUsage;
-        return 1;
-      }
+      std::cout << kUsage;
+      return 0;
     }
-    if (o.bag.empty() || o.output.empty())
-    {
-      std::cerr << "run_pipeline: --bag and --output are required\n\n" << kUsage;
-      return 1;
-    }
+  }
+  catch (const gvf::UsageError& e)
+  {
+    return gvf::usageFailure("run_pipeline", e.what(), kUsage, 1);
+  }
+  try
+  {
     return run(o);
   }
   catch (const std::exception& e)
