@@ -68,8 +68,14 @@ TEST(LatencyProbe, WritesEachFramesLatencyToItsObjectsAndLeavesItEmptyWithout)
 
   const std::string program = LATENCY_PROBE;
   const std::string output = csv.string();
-  std::vector<char*> argv{const_cast<char*>(program.c_str()), const_cast<char*>("--output"),
-                          const_cast<char*>(output.c_str()), nullptr};
+  // A ROS remapping among the options: ros::init takes it out before the options are read, and
+  // the probe's --objects topic is remapped to the one published here.
+  std::vector<char*> argv{const_cast<char*>(program.c_str()),
+                          const_cast<char*>("--output"),
+                          const_cast<char*>(output.c_str()),
+                          const_cast<char*>("/objects_elsewhere:=/objects"),
+                          const_cast<char*>("--objects=/objects_elsewhere"),
+                          nullptr};
   pid_t pid = 0;
   ASSERT_EQ(posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ), 0) << program;
   ASSERT_TRUE(

@@ -11,6 +11,7 @@
 #include <iterator>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace
 {
@@ -349,6 +350,77 @@ TEST_F(ToolErrors, BagSummaryNamesABagWithoutObjects)
                             " --frames-dir " + (work_ / "frames").string());
   expectCleanFailure(result, full_bag_.string(), video);
   EXPECT_FALSE(fs::exists(work_ / "frames"));
+}
+
+TEST_F(ToolErrors, OptionsTakeTheirValueAfterAnEqualsSign)
+{
+  const Result result = run(std::string(MAKE_SYNTHETIC_DRIVE) + " --output=" + (work_ / "kitti").string() +
+                            " --scenario=" + GVF_SOURCE_DIR + "/test/data/kitti_replay_scenario.yaml" +
+                            " --calibration=" + GVF_SOURCE_DIR + "/data/calibration/2011_09_26 --frames=1");
+  EXPECT_EQ(result.status, 0) << result.output;
+  EXPECT_NE(result.output.find(": 1 frames"), std::string::npos) << result.output;
+}
+
+/// Every tool (boost::program_options through cli/command_line.h) names the option at fault, shows
+/// its usage and exits with its status for usage errors.
+TEST(ToolOptions, EveryToolNamesTheOptionAtFaultWithItsUsage)
+{
+  struct Tool
+  {
+    std::string path, name;
+    int usage_status;
+    std::string option_with_value;  ///< an option of the tool that takes a value
+  };
+  const Tool tools[] = {{BAG_SUMMARY, "bag_summary", 1, "--bag"},
+                        {DETECT, "detect", 2, "--output"},
+                        {EVALUATE, "evaluate", 2, "--output"},
+                        {KITTI_TO_BAG, "kitti_to_bag", 2, "--calib"},
+                        {LATENCY_PROBE, "latency_probe", 1, "--output"},
+                        {MAKE_SYNTHETIC_DRIVE, "make_synthetic_drive", 1, "--output"},
+                        {RUN_PIPELINE, "run_pipeline", 1, "--output"}};
+  for (const Tool& tool : tools)
+  {
+    const std::string usage = "sage: " + tool.name;  // "usage:" or kitti_to_bag's "Usage:"
+    const Result help = run(tool.path + " --help");
+    EXPECT_EQ(WEXITSTATUS(help.status), 0) << help.output;
+    EXPECT_NE(help.output.find(usage), std::string::npos) << help.output;
+    EXPECT_EQ(WEXITSTATUS(run(tool.path + " -h").status), 0) << tool.name;
+    for (const auto& [arguments, message] :
+         {std::pair{std::string(" --bogus=1"), std::string("unknown option --bogus")},
+          std::pair{" " + tool.option_with_value, "missing the value of " + tool.option_with_value},
+          std::pair{" " + tool.option_with_value + " --help",
+                    "missing the value of " + tool.option_with_value},
+          std::pair{" " + tool.option_with_value + "=a " + tool.option_with_value + "=b",
+                    tool.option_with_value + " is given more than once"},
+          std::pair{std::string(" --help=yes"), std::string("--help takes no value")}})
+    {
+      const Result result = run(tool.path + arguments);
+      EXPECT_EQ(WEXITSTATUS(result.status), tool.usage_status) << tool.name << arguments << "\n"
+                                                               << result.output;
+      EXPECT_NE(result.output.find(tool.name + ": " + message + "\n"), std::string::npos)
+          << tool.name << arguments << "\n"
+          << result.output;
+      EXPECT_NE(result.output.find(usage), std::string::npos) << tool.name << arguments << "\n"
+                                                              << result.output;
+    }
+  }
+  // A value its option's type refuses.
+  const Result number = run(std::string(EVALUATE) + " --drive d --detections b --output o --iou abc");
+  EXPECT_EQ(WEXITSTATUS(number.status), 2) << number.output;
+  EXPECT_NE(number.output.find("evaluate: --iou expects a number, got 'abc'"), std::string::npos)
+      << number.output;
+  const Result integer = run(std::string(MAKE_SYNTHETIC_DRIVE) + " --output o --frames 2.5");
+  EXPECT_EQ(WEXITSTATUS(integer.status), 1) << integer.output;
+  EXPECT_NE(integer.output.find("make_synthetic_drive: --frames expects an integer, got '2.5'"),
+            std::string::npos)
+      << integer.output;
+  const Result seconds = run(std::string(RUN_PIPELINE) + " --bag b --output o --max-tf-wait=-1");
+  EXPECT_EQ(WEXITSTATUS(seconds.status), 1) << seconds.output;
+  EXPECT_NE(seconds.output.find("run_pipeline: --max-tf-wait needs seconds >= 0, got -1"), std::string::npos)
+      << seconds.output;
+  const Result stray = run(std::string(BAG_SUMMARY) + " --bag b.bag extra");
+  EXPECT_EQ(WEXITSTATUS(stray.status), 1) << stray.output;
+  EXPECT_NE(stray.output.find("bag_summary: unexpected argument 'extra'"), std::string::npos) << stray.output;
 }
 
 TEST(LatencyProbeErrors, NamesTheOptionOrTheFileAtFault)
