@@ -59,7 +59,8 @@ bool namesAnOption(const std::string& token, const po::options_description& opti
 {
   if (token.rfind("--", 0) == 0)
   {
-    return options.find_nothrow(token.substr(2, token.find('=') - 2), false) != nullptr;
+    const std::string name = token.substr(2, token.find('=') - 2);
+    return !name.empty() && options.find_nothrow(name, false) != nullptr;
   }
   if (token.size() < 2 || token[0] != '-')
   {

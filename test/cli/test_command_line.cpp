@@ -88,6 +88,7 @@ TEST(CommandLine, ErrorsNameTheOptionAtFault)
   EXPECT_EQ(errorOf({"--output="}), "missing the value of --output");
   EXPECT_EQ(errorOf({"--output", "--quiet"}), "missing the value of --output");
   EXPECT_EQ(errorOf({"--output", "-q"}), "missing the value of --output");
+  EXPECT_EQ(errorOf({"--output", "--frames=2"}), "missing the value of --output");
   EXPECT_EQ(errorOf({"--quiet=yes"}), "--quiet takes no value");
   EXPECT_EQ(errorOf({"--output", "a", "--output", "b"}), "--output is given more than once");
   EXPECT_EQ(errorOf({"--tolerance", "abc"}), "--tolerance expects a number, got 'abc'");
