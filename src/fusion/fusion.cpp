@@ -65,7 +65,7 @@ FusedObject unsupportedObject(std::size_t detection_index)
   FusedObject object;
   object.detection_index = detection_index;
   object.support = ObjectSupport::kBox;
-  object.x = object.y = object.median_x = object.median_y = std::numeric_limits<double>::quiet_NaN();
+  object.median_x = object.median_y = std::numeric_limits<double>::quiet_NaN();
   return object;
 }
 
@@ -87,8 +87,6 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
   }
   object.median_x = median(xs);
   object.median_y = median(ys);
-  object.x = object.median_x;
-  object.y = object.median_y;
   object.cluster = objectCluster(points, object.members, box, config.centre.cluster_distance, expected);
   object.grid = gridEvidence(points, object.cluster);
   for (std::uint32_t i : config.motion_vote == MotionVote::kCluster ? object.cluster : object.members)
@@ -104,14 +102,13 @@ FusedObject pointwiseFeatures(std::size_t detection_index, const BoundingBox& bo
       ++object.static_points;
     }
   }
-  object.motion = decideMotion(object.static_points, object.dynamic_points, config);
+  object.vote = decideMotion(object.static_points, object.dynamic_points, config);
   const double votes = static_cast<double>(object.static_points) + object.dynamic_points;
-  object.p_dynamic = votes > 0.0 ? object.dynamic_points / votes : 0.5;
-  if (object.motion == Motion::kDynamic)
+  object.dynamic_share = votes > 0.0 ? object.dynamic_points / votes : 0.5;
+  if (object.vote == Motion::kDynamic)
   {
-    object.vx = median(vxs);
-    object.vy = median(vys);
-    object.heading = std::atan2(object.vy, object.vx);
+    object.vote_vx = median(vxs);
+    object.vote_vy = median(vys);
   }
   return object;
 }
@@ -233,7 +230,13 @@ FusionRegion FusionRegion::fromBox(const BoundingBox& box, const FusionConfig& c
   return region;
 }
 
-double FusedObject::speed() const
+Eigen::Vector2d FusedObject::position(PositionSource source) const
+{
+  return source == PositionSource::kCentre ? Eigen::Vector2d(centre_x, centre_y)
+                                           : Eigen::Vector2d(median_x, median_y);
+}
+
+double ReportedObject::speed() const
 {
   return std::hypot(vx, vy);
 }
@@ -378,7 +381,6 @@ FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPoint
       result.objects.push_back(pointwiseFeatures(d, detections[d].box, members[d], points, config,
                                                  d < expected.size() ? expected[d] : kNone));
     }
-    result.objects.back().id = static_cast<std::uint32_t>(d);
   }
   return result;
 }
@@ -441,9 +443,36 @@ void placeOnGround(FusionResult& result, const std::vector<Detection>& detection
     const Eigen::Vector2d sight = foot - camera;
     const Eigen::Vector2d centre =
         sight.norm() > 0.0 ? Eigen::Vector2d(foot + depth * sight.normalized()) : foot;
-    object.x = object.median_x = centre.x();
-    object.y = object.median_y = centre.y();
+    object.centre_x = object.median_x = centre.x();
+    object.centre_y = object.median_y = centre.y();
   }
+}
+
+void reportPerFrame(FusionResult& result, const std::vector<Detection>& detections, PositionSource position)
+{
+  result.reports.clear();
+  result.reports.reserve(result.objects.size());
+  for (std::size_t i = 0; i < result.objects.size(); ++i)
+  {
+    const FusedObject& object = result.objects[i];
+    const Detection& detection = detections.at(object.detection_index);
+    ReportedObject report;
+    report.id = static_cast<std::uint32_t>(object.detection_index);
+    report.label = detection.label;
+    report.class_id = detection.class_id;
+    report.support = object.support;
+    report.motion = object.vote;
+    report.p_dynamic = object.dynamic_share;
+    // An object without cells has its box's place on the ground as centre and median alike.
+    const Eigen::Vector2d at = object.position(position);
+    report.x = at.x();
+    report.y = at.y();
+    report.vx = object.vote_vx;
+    report.vy = object.vote_vy;
+    report.heading = object.vote == Motion::kDynamic ? std::atan2(object.vote_vy, object.vote_vx) : 0.0;
+    result.reports.push_back(std::move(report));
+  }
+  result.tracked = false;
 }
 
 std::string checkFusionInputs(const std::vector<Detection>& detections, std::uint32_t detections_width,
@@ -509,8 +538,8 @@ void estimateCentres(FusionResult& result, const std::vector<Detection>& detecti
         object.cluster.empty()
             ? estimateCentre(points, object.members, detection.box, camera_x, camera_y, size, config)
             : centreOfCluster(points, object.cluster, camera_x, camera_y, size, config.max_scans_since_hit);
-    object.x = centre.x;
-    object.y = centre.y;
+    object.centre_x = centre.x;
+    object.centre_y = centre.y;
     object.length = centre.length;
   }
 }

@@ -21,7 +21,7 @@ bool isHit(const ProjectedPointsView& points, std::size_t i)
 
 void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>& detections,
                   std::uint32_t image_width, const ProjectedPointsView& points, FusionResult& result,
-                  const Eigen::Vector2d& camera)
+                  const Eigen::Vector2d& camera, PositionSource position)
 {
   std::vector<TrackObservation> observations;
   observations.reserve(result.objects.size());
@@ -35,8 +35,9 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
     o.score = detection.score;
     o.class_id = detection.class_id;
     o.box = detection.box;
-    o.x = object.x;
-    o.y = object.y;
+    const Eigen::Vector2d at = object.position(position);
+    o.x = at.x();
+    o.y = at.y();
     o.truncated = detection.box.x_min <= margin || detection.box.x_max >= right_edge;
     o.length = object.length;
     o.grid = object.grid;
@@ -64,31 +65,37 @@ void trackObjects(Tracker& tracker, double stamp_s, const std::vector<Detection>
   }
   const std::vector<TrackEstimate> estimates =
       tracker.update(stamp_s, observations, std::move(scene_hits), camera);
+  result.reports.clear();
+  result.reports.reserve(result.objects.size());
   for (std::size_t i = 0; i < result.objects.size(); ++i)
   {
-    FusedObject& object = result.objects[i];
+    const FusedObject& object = result.objects[i];
     const TrackEstimate& track = estimates[i];
-    object.id = track.id;
-    object.label = track.label;
-    object.class_id = track.class_id;
-    object.track_state = track.confirmed ? TrackState::kConfirmed : TrackState::kTentative;
+    ReportedObject report;
+    report.id = track.id;
+    report.label = track.label;
+    report.class_id = track.class_id;
+    report.track_state = track.confirmed ? TrackState::kConfirmed : TrackState::kTentative;
     if (object.support != ObjectSupport::kCells)
     {
       // No cell says anything about its motion in this image: its track's prediction, or its box.
-      object.support = track.located ? ObjectSupport::kTrack : ObjectSupport::kBox;
-      object.p_dynamic = track.located ? track.p_dynamic : 0.5;
-      object.x = track.located ? track.x : object.x;
-      object.y = track.located ? track.y : object.y;
+      report.support = track.located ? ObjectSupport::kTrack : ObjectSupport::kBox;
+      report.p_dynamic = track.located ? track.p_dynamic : 0.5;
+      report.x = track.located ? track.x : observations[i].x;
+      report.y = track.located ? track.y : observations[i].y;
+      result.reports.push_back(std::move(report));
       continue;
     }
-    object.p_dynamic = track.p_dynamic;
-    object.motion = track.motion;
-    object.x = track.x;
-    object.y = track.y;
+    report.support = ObjectSupport::kCells;
+    report.p_dynamic = track.p_dynamic;
+    report.motion = track.motion;
+    report.x = track.x;
+    report.y = track.y;
     const bool dynamic = track.motion == Motion::kDynamic;
-    object.vx = dynamic ? track.vx : 0.0;
-    object.vy = dynamic ? track.vy : 0.0;
-    object.heading = dynamic ? std::atan2(track.vy, track.vx) : 0.0;
+    report.vx = dynamic ? track.vx : 0.0;
+    report.vy = dynamic ? track.vy : 0.0;
+    report.heading = dynamic ? std::atan2(track.vy, track.vx) : 0.0;
+    result.reports.push_back(std::move(report));
   }
   result.tracked = true;
 }

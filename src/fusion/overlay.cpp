@@ -24,11 +24,6 @@ void requireBgr(const cv::Mat& image)
   }
 }
 /// The label an object is published with: its track's, else its detection's.
-const std::string& labelOf(const FusedObject& object, const Detection& detection)
-{
-  return object.label.empty() ? detection.label : object.label;
-}
-
 }  // namespace
 
 cv::Scalar motionColor(Motion motion)
@@ -90,12 +85,13 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
 {
   requireBgr(image);
   drawProjectedPoints(image, points);
-  std::vector<const FusedObject*> object_of(detections.size(), nullptr);
-  for (const auto& object : result.objects)
+  // The report of each detection's object (none: the fusion has no object for it).
+  std::vector<const ReportedObject*> object_of(detections.size(), nullptr);
+  for (std::size_t i = 0; i < result.objects.size() && i < result.reports.size(); ++i)
   {
-    if (object.detection_index < detections.size())
+    if (result.objects[i].detection_index < detections.size())
     {
-      object_of[object.detection_index] = &object;
+      object_of[result.objects[i].detection_index] = &result.reports[i];
     }
   }
   for (std::size_t d = 0; d < detections.size(); ++d)
@@ -104,7 +100,7 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     const FusionRegion band = FusionRegion::fromBox(detection.box, config);
     cv::rectangle(image, cv::Point2f(band.u_min, band.v_min), cv::Point2f(band.u_max, band.v_max), kBandColor,
                   1);
-    const FusedObject* object = object_of[d];
+    const ReportedObject* object = object_of[d];
     const bool tentative = object && object->track_state == TrackState::kTentative;
     // A new (tentative) track is drawn grey, as an object without a verdict.
     const cv::Scalar color = motionColor(object && !tentative ? object->motion : Motion::kUnknown);
@@ -113,14 +109,12 @@ void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections,
     std::string text = detection.label + " (no grid points)";
     if (tentative)
     {
-      text = trackLabel(object->id, object->motion, labelOf(*object, detection), object->speed()) +
-             " (new track)";
+      text = trackLabel(object->id, object->motion, object->label, object->speed()) + " (new track)";
     }
     else if (object)
     {
-      text = result.tracked
-                 ? trackLabel(object->id, object->motion, labelOf(*object, detection), object->speed())
-                 : objectLabel(object->motion, detection.label, object->speed());
+      text = result.tracked ? trackLabel(object->id, object->motion, object->label, object->speed())
+                            : objectLabel(object->motion, object->label, object->speed());
     }
     int baseline = 0;
     const double scale = 0.5;

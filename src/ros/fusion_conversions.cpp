@@ -3,6 +3,7 @@
 #include <boost/make_shared.hpp>
 
 #include <sstream>
+#include <stdexcept>
 
 #include "grid_vision_fusion/fusion/overlay.h"
 
@@ -118,26 +119,34 @@ DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, cons
   msg->header.stamp = image_header.stamp;
   msg->header.frame_id = grid_frame_id;
   msg->image_frame_id = image_header.frame_id;
-  msg->objects.reserve(result.objects.size());
-  for (const auto& object : result.objects)
+  if (result.reports.size() != result.objects.size())
   {
+    throw std::invalid_argument("objectsToMsg: " + std::to_string(result.reports.size()) + " reports for " +
+                                std::to_string(result.objects.size()) +
+                                " objects (reportPerFrame() or trackObjects() makes them)");
+  }
+  msg->objects.reserve(result.objects.size());
+  for (std::size_t i = 0; i < result.objects.size(); ++i)
+  {
+    const FusedObject& object = result.objects[i];
+    const ReportedObject& report = result.reports[i];
     const Detection& detection = detections.at(object.detection_index);
     DetectedObject out;
-    out.id = object.id;
-    out.class_id = object.label.empty() ? detection.class_id : object.class_id;
-    out.label = object.label.empty() ? detection.label : object.label;
+    out.id = report.id;
+    out.class_id = report.class_id;
+    out.label = report.label;
     out.score = detection.score;
-    out.motion = static_cast<std::uint8_t>(object.motion);
-    out.p_dynamic = static_cast<float>(object.p_dynamic);
-    out.track_state = static_cast<std::uint8_t>(object.track_state);
-    out.position_source = static_cast<std::uint8_t>(object.support);
+    out.motion = static_cast<std::uint8_t>(report.motion);
+    out.p_dynamic = static_cast<float>(report.p_dynamic);
+    out.track_state = static_cast<std::uint8_t>(report.track_state);
+    out.position_source = static_cast<std::uint8_t>(report.support);
     out.static_points = object.static_points;
     out.dynamic_points = object.dynamic_points;
-    out.position.x = object.x;
-    out.position.y = object.y;
-    out.velocity.x = object.vx;
-    out.velocity.y = object.vy;
-    out.heading = static_cast<float>(object.heading);
+    out.position.x = report.x;
+    out.position.y = report.y;
+    out.velocity.x = report.vx;
+    out.velocity.y = report.vy;
+    out.heading = static_cast<float>(report.heading);
     out.x_min = detection.box.x_min;
     out.y_min = detection.box.y_min;
     out.x_max = detection.box.x_max;

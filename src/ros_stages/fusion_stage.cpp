@@ -83,7 +83,11 @@ FusedPair FusionStage::fuse(const Detection2DArray& detections, const ProjectedG
   {
     pair.tracks_reset = tracker_.resetReason(stamp);
     trackObjects(tracker_, stamp, pair.detections, detections.image_width, points, pair.result,
-                 Eigen::Vector2d(grid.camera_position.x, grid.camera_position.y));
+                 Eigen::Vector2d(grid.camera_position.x, grid.camera_position.y), params_.fusion.position);
+  }
+  else
+  {
+    reportPerFrame(pair.result, pair.detections, params_.fusion.position);
   }
   pair.objects = objectsToMsg(detections.header, grid.grid_frame_id, pair.detections, pair.result);
   return pair;

@@ -39,6 +39,15 @@ void addDynamic(ProjectedPoints& pts, float u, float v, float x, float y, float 
 
 // The paper's decision rule, the default: every cell of the fusion band votes (stated, as these
 // tests check that rule whatever the default).
+/// fuse(), then the paper's per-frame report of every object, positions at the median.
+FusionResult fuseAndReport(const std::vector<Detection>& detections, const ProjectedPointsView& points,
+                           const FusionConfig& config)
+{
+  FusionResult result = fuse(detections, points, config);
+  reportPerFrame(result, detections, PositionSource::kMedian);
+  return result;
+}
+
 FusionConfig paperRule()
 {
   FusionConfig config;
@@ -153,19 +162,21 @@ TEST(Fuse, EmptyRegionGivesAnObjectWithoutSupport)
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& object = result.objects[0];
   EXPECT_EQ(object.support, ObjectSupport::kBox);
-  EXPECT_EQ(object.motion, Motion::kUnknown);
+  EXPECT_EQ(object.vote, Motion::kUnknown);
   EXPECT_EQ(object.static_points + object.dynamic_points, 0U);
-  EXPECT_DOUBLE_EQ(object.p_dynamic, 0.5);
-  EXPECT_TRUE(std::isnan(object.x)) << "placeOnGround() gives it a position";
+  EXPECT_DOUBLE_EQ(object.dynamic_share, 0.5);
+  EXPECT_TRUE(std::isnan(object.median_x)) << "placeOnGround() gives it a position";
+  EXPECT_TRUE(std::isnan(object.centre_x));
   EXPECT_EQ(result.invalid_points, 0U);
 }
 
 TEST(Fuse, NoDetectionsAndNoPoints)
 {
   EXPECT_TRUE(fuse({}, ProjectedPoints{}.view(), FusionConfig{}).objects.empty());
-  const FusionResult result = fuse({kBox, kBox}, ProjectedPoints{}.view(), FusionConfig{});
+  const FusionResult result = fuseAndReport({kBox, kBox}, ProjectedPoints{}.view(), FusionConfig{});
   ASSERT_EQ(result.objects.size(), 2U);
-  EXPECT_EQ(result.objects[1].id, 1U);
+  ASSERT_EQ(result.reports.size(), 2U);
+  EXPECT_EQ(result.reports[1].id, 1U);
   EXPECT_EQ(result.objects[1].detection_index, 1U);
 }
 
@@ -211,13 +222,16 @@ TEST(PlaceOnGround, BoxWithoutCellsStandsOnTheGroundBehindItsBottomEdge)
   addStatic(pts, 150.F, 170.F, 7.F, 1.F);  // kBox's cell
   FusionResult result = fuse({kBox, car}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 2U);
-  result.objects[0].x = 7.0;  // as estimateCentres() leaves it
+  result.objects[0].centre_x = 7.0;  // as estimateCentres() leaves it
   const std::map<std::string, Footprint> footprints{{"car", {3.9, 1.6}}};
   placeOnGround(result, {kBox, car}, levelCamera(), footprints);
-  EXPECT_DOUBLE_EQ(result.objects[0].x, 7.0) << "an object with cells keeps its position";
+  EXPECT_DOUBLE_EQ(result.objects[0].centre_x, 7.0) << "an object with cells keeps its position";
   // The bottom centre (320, 315) looks at (10, 0); half the mean of 3.9 and 1.6 m beyond it.
-  EXPECT_NEAR(result.objects[1].x, 10.0 + 0.25 * (3.9 + 1.6), 1e-9);
-  EXPECT_NEAR(result.objects[1].y, 0.0, 1e-9);
+  EXPECT_NEAR(result.objects[1].centre_x, 10.0 + 0.25 * (3.9 + 1.6), 1e-9);
+  EXPECT_NEAR(result.objects[1].centre_y, 0.0, 1e-9);
+  EXPECT_EQ(result.objects[1].position(PositionSource::kMedian),
+            result.objects[1].position(PositionSource::kCentre))
+      << "its median is the same place";
   EXPECT_EQ(result.objects[1].support, ObjectSupport::kBox);
 }
 
@@ -227,18 +241,24 @@ TEST(Fuse, OnlyStaticPointsOddMedian)
   addStatic(pts, 120.F, 170.F, 10.F, 2.F);
   addStatic(pts, 150.F, 180.F, 12.F, 1.F);
   addStatic(pts, 180.F, 190.F, 11.F, 5.F);
-  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
+  const FusionResult result = fuseAndReport({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& o = result.objects[0];
   EXPECT_EQ(o.detection_index, 0U);
-  EXPECT_EQ(o.motion, Motion::kStatic);
+  EXPECT_EQ(o.vote, Motion::kStatic);
   EXPECT_EQ(o.static_points, 3U);
   EXPECT_EQ(o.dynamic_points, 0U);
-  EXPECT_DOUBLE_EQ(o.x, 11.0);  // median of 10, 12, 11
-  EXPECT_DOUBLE_EQ(o.y, 2.0);   // median of 2, 1, 5
-  EXPECT_DOUBLE_EQ(o.vx, 0.0);
-  EXPECT_DOUBLE_EQ(o.vy, 0.0);
-  EXPECT_DOUBLE_EQ(o.heading, 0.0);
+  EXPECT_DOUBLE_EQ(o.median_x, 11.0);  // median of 10, 12, 11
+  EXPECT_DOUBLE_EQ(o.median_y, 2.0);   // median of 2, 1, 5
+  const ReportedObject& r = result.reports.at(0);
+  EXPECT_EQ(r.motion, Motion::kStatic);
+  EXPECT_DOUBLE_EQ(r.x, 11.0);
+  EXPECT_DOUBLE_EQ(r.y, 2.0);
+  EXPECT_DOUBLE_EQ(r.vx, 0.0);
+  EXPECT_DOUBLE_EQ(r.vy, 0.0);
+  EXPECT_DOUBLE_EQ(r.heading, 0.0);
+  EXPECT_EQ(r.label, kBox.label);
+  EXPECT_EQ(r.track_state, TrackState::kNone);
 }
 
 TEST(Fuse, DynamicMajorityEvenMedians)
@@ -250,18 +270,22 @@ TEST(Fuse, DynamicMajorityEvenMedians)
   addStatic(pts, 140.F, 190.F, 30.F, 4.F);
   // Position over all 4 points: x sorted 20 21 22 30 → 21.5; y sorted 1 2 3 4 → 2.5.
   // Velocity over the 3 dynamic points: vx sorted 4 5 6 → 5; vy sorted 1 2 3 → 2.
-  const FusionResult result = fuse({kBox}, pts.view(), paperRule());
+  const FusionResult result = fuseAndReport({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
   const FusedObject& o = result.objects[0];
-  EXPECT_EQ(o.motion, Motion::kDynamic);
+  EXPECT_EQ(o.vote, Motion::kDynamic);
   EXPECT_EQ(o.static_points, 1U);
   EXPECT_EQ(o.dynamic_points, 3U);
-  EXPECT_DOUBLE_EQ(o.x, 21.5);
-  EXPECT_DOUBLE_EQ(o.y, 2.5);
-  EXPECT_DOUBLE_EQ(o.vx, 5.0);
-  EXPECT_DOUBLE_EQ(o.vy, 2.0);
-  EXPECT_NEAR(o.heading, std::atan2(2.0, 5.0), 1e-12);
-  EXPECT_NEAR(o.speed(), std::sqrt(29.0), 1e-12);
+  EXPECT_DOUBLE_EQ(o.dynamic_share, 0.75);
+  const ReportedObject& r = result.reports.at(0);
+  EXPECT_EQ(r.motion, Motion::kDynamic);
+  EXPECT_DOUBLE_EQ(r.p_dynamic, 0.75);
+  EXPECT_DOUBLE_EQ(r.x, 21.5);
+  EXPECT_DOUBLE_EQ(r.y, 2.5);
+  EXPECT_DOUBLE_EQ(r.vx, 5.0);
+  EXPECT_DOUBLE_EQ(r.vy, 2.0);
+  EXPECT_NEAR(r.heading, std::atan2(2.0, 5.0), 1e-12);
+  EXPECT_NEAR(r.speed(), std::sqrt(29.0), 1e-12);
 }
 
 TEST(Fuse, EvenVelocityMedian)
@@ -272,8 +296,8 @@ TEST(Fuse, EvenVelocityMedian)
   // vx (1 + 3)/2 = 2, vy (−1 − 5)/2 = −3
   const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   ASSERT_EQ(result.objects.size(), 1U);
-  EXPECT_DOUBLE_EQ(result.objects[0].vx, 2.0);
-  EXPECT_DOUBLE_EQ(result.objects[0].vy, -3.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].vote_vx, 2.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].vote_vy, -3.0);
 }
 
 TEST(Fuse, TieFollowsTheRule)
@@ -282,13 +306,13 @@ TEST(Fuse, TieFollowsTheRule)
   addStatic(pts, 110.F, 170.F, 1.F, 1.F);
   addDynamic(pts, 120.F, 170.F, 3.F, 3.F, 2.F, 0.F);
   FusionConfig config = paperRule();
-  EXPECT_EQ(fuse({kBox}, pts.view(), config).objects.at(0).motion, Motion::kStatic);
+  EXPECT_EQ(fuse({kBox}, pts.view(), config).objects.at(0).vote, Motion::kStatic);
   config.tie_rule = TieRule::kDynamic;
   const FusedObject dynamic = fuse({kBox}, pts.view(), config).objects.at(0);
-  EXPECT_EQ(dynamic.motion, Motion::kDynamic);
-  EXPECT_DOUBLE_EQ(dynamic.vx, 2.0);
+  EXPECT_EQ(dynamic.vote, Motion::kDynamic);
+  EXPECT_DOUBLE_EQ(dynamic.vote_vx, 2.0);
   config.tie_rule = TieRule::kUnknown;
-  const FusedObject unknown = fuse({kBox}, pts.view(), config).objects.at(0);
+  const ReportedObject unknown = fuseAndReport({kBox}, pts.view(), config).reports.at(0);
   EXPECT_EQ(unknown.motion, Motion::kUnknown);
   EXPECT_DOUBLE_EQ(unknown.vx, 0.0);
   EXPECT_DOUBLE_EQ(unknown.x, 2.0);  // position still reported: (1 + 3)/2
@@ -300,12 +324,12 @@ TEST(Fuse, MinimumPointCountGivesUnknown)
   addDynamic(pts, 110.F, 170.F, 5.F, 6.F, 2.F, 0.F);
   FusionConfig config = paperRule();
   config.min_points = 2;
-  const FusionResult result = fuse({kBox}, pts.view(), config);
+  const FusionResult result = fuseAndReport({kBox}, pts.view(), config);
   ASSERT_EQ(result.objects.size(), 1U);
-  EXPECT_EQ(result.objects[0].motion, Motion::kUnknown);
+  EXPECT_EQ(result.objects[0].vote, Motion::kUnknown);
   EXPECT_EQ(result.objects[0].dynamic_points, 1U);
-  EXPECT_DOUBLE_EQ(result.objects[0].x, 5.0);
-  EXPECT_DOUBLE_EQ(result.objects[0].heading, 0.0);
+  EXPECT_DOUBLE_EQ(result.reports.at(0).x, 5.0);
+  EXPECT_DOUBLE_EQ(result.reports.at(0).heading, 0.0);
 }
 
 TEST(Fuse, HeadingInAllFourQuadrants)
@@ -325,9 +349,9 @@ TEST(Fuse, HeadingInAllFourQuadrants)
   {
     ProjectedPoints pts;
     addDynamic(pts, 150.F, 180.F, 0.F, 0.F, c.vx, c.vy);
-    const FusionResult result = fuse({kBox}, pts.view(), paperRule());
-    ASSERT_EQ(result.objects.size(), 1U);
-    EXPECT_NEAR(result.objects[0].heading, c.heading, 1e-6) << "v = (" << c.vx << ", " << c.vy << ")";
+    const FusionResult result = fuseAndReport({kBox}, pts.view(), paperRule());
+    ASSERT_EQ(result.reports.size(), 1U);
+    EXPECT_NEAR(result.reports[0].heading, c.heading, 1e-6) << "v = (" << c.vx << ", " << c.vy << ")";
   }
 }
 
@@ -359,7 +383,7 @@ TEST(Fuse, OverlappingBoxesShareByDefault)
   EXPECT_EQ(owned.objects[0].detection_index, 0U);  // far car, listed first
   EXPECT_EQ(owned.objects[0].static_points, 0U);
   EXPECT_EQ(owned.objects[0].dynamic_points, 1U);
-  EXPECT_EQ(owned.objects[0].motion, Motion::kDynamic);
+  EXPECT_EQ(owned.objects[0].vote, Motion::kDynamic);
   EXPECT_EQ(owned.objects[1].static_points, 2U);
 }
 
@@ -397,8 +421,8 @@ TEST(Fuse, NaNCoordinatesAreIgnored)
   ASSERT_EQ(result.objects.size(), 1U);
   EXPECT_EQ(result.objects[0].static_points, 1U);
   EXPECT_EQ(result.objects[0].dynamic_points, 0U);
-  EXPECT_DOUBLE_EQ(result.objects[0].x, 4.0);
-  EXPECT_DOUBLE_EQ(result.objects[0].y, 6.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].median_x, 4.0);
+  EXPECT_DOUBLE_EQ(result.objects[0].median_y, 6.0);
 }
 
 TEST(Fuse, StaticPointVelocityIsNotUsed)
@@ -408,7 +432,7 @@ TEST(Fuse, StaticPointVelocityIsNotUsed)
   const FusionResult result = fuse({kBox}, pts.view(), paperRule());
   EXPECT_EQ(result.invalid_points, 0U);
   ASSERT_EQ(result.objects.size(), 1U);
-  EXPECT_EQ(result.objects[0].motion, Motion::kStatic);
+  EXPECT_EQ(result.objects[0].vote, Motion::kStatic);
 }
 
 TEST(FusionConfig, MotionVoteNames)
@@ -439,17 +463,17 @@ TEST(Fuse, ClusterVoteLeavesOutTheCellsAroundTheObject)
   FusionConfig config = paperRule();
   const FusionResult region = fuse({kBox}, pts.view(), config);
   ASSERT_EQ(region.objects.size(), 1U);
-  EXPECT_EQ(region.objects[0].motion, Motion::kStatic);
+  EXPECT_EQ(region.objects[0].vote, Motion::kStatic);
   EXPECT_EQ(region.objects[0].static_points, 7U);
 
   config.motion_vote = MotionVote::kCluster;
   const FusionResult cluster = fuse({kBox}, pts.view(), config);
   ASSERT_EQ(cluster.objects.size(), 1U);
   const FusedObject& o = cluster.objects[0];
-  EXPECT_EQ(o.motion, Motion::kDynamic);
+  EXPECT_EQ(o.vote, Motion::kDynamic);
   EXPECT_EQ(o.static_points, 0U);
   EXPECT_EQ(o.dynamic_points, 4U);
-  EXPECT_FLOAT_EQ(o.vx, 1.3F);  // median of 1.0, 1.2, 1.4, 1.6
+  EXPECT_FLOAT_EQ(o.vote_vx, 1.3F);  // median of 1.0, 1.2, 1.4, 1.6
   // The position stays the region's median (the paper's): the 6th of the 11 x values sorted.
   EXPECT_FLOAT_EQ(o.median_x, 13.F);
   EXPECT_EQ(o.members.size(), 11U);
@@ -493,8 +517,8 @@ TEST(Fuse, GridEvidenceComesFromTheClustersCells)
   EXPECT_GT(o.grid.velocity_variance.x(), 0.5);
   EXPECT_LT(o.grid.velocity_variance.x(), 0.6);
   EXPECT_NEAR(o.grid.velocity_variance.y(), 0.5, 1e-5);
-  EXPECT_EQ(o.motion, Motion::kStatic);  // the states: 4 static cells against 1
-  EXPECT_NEAR(o.p_dynamic, 1.0 / 8.0, 1e-12) << "the region's vote: 1 dynamic of 8 cells";
+  EXPECT_EQ(o.vote, Motion::kStatic);  // the states: 4 static cells against 1
+  EXPECT_NEAR(o.dynamic_share, 1.0 / 8.0, 1e-12) << "the region's vote: 1 dynamic of 8 cells";
 
   // Without masses and variances (a view that does not carry them) the states give the share
   // and there is no velocity evidence.

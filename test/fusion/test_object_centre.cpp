@@ -102,8 +102,8 @@ TEST(ObjectCentre, RotatedCarOrientationAndCentre)
   ASSERT_EQ(result.objects.size(), 1U);
   EXPECT_GT(std::hypot(result.objects[0].median_x - 15.0, result.objects[0].median_y - 4.0), 0.7);
   estimateCentres(result, {Detection{0, "car", 0.9F, kBox}}, points.view(), 0.0, 0.0, CentreConfig{});
-  EXPECT_NEAR(result.objects[0].x, c.x, 1e-9);
-  EXPECT_NEAR(result.objects[0].y, c.y, 1e-9);
+  EXPECT_NEAR(result.objects[0].centre_x, c.x, 1e-9);
+  EXPECT_NEAR(result.objects[0].centre_y, c.y, 1e-9);
 }
 
 TEST(ObjectCentre, CellsBelowTheBottomEdgeBelongToAnObjectInFront)
@@ -182,7 +182,7 @@ TEST(ObjectCentre, WithoutAFootprintTheCentreOfTheCells)
   // estimateCentres() looks the footprint up by label: "tram" has one, "robot" has none.
   FusionResult result = fuse({Detection{0, "robot", 0.9F, kBox}}, points.view(), FusionConfig{});
   estimateCentres(result, {Detection{0, "robot", 0.9F, kBox}}, points.view(), 0.0, 0.0, CentreConfig{});
-  EXPECT_NEAR(result.objects.at(0).x, 10.0, 1e-6);
+  EXPECT_NEAR(result.objects.at(0).centre_x, 10.0, 1e-6);
 }
 
 TEST(ObjectCentre, ObservedExtentLargerThanTheFootprintIsKept)

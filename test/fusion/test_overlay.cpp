@@ -35,8 +35,9 @@ TEST(Overlay, BoxesColouredByMotionAndPointsByState)
   points.add(70.F, 150.F, 10.F, 1.F, 5.F, 0.F, CellState::kDynamic);
   points.add(210.F, 150.F, 12.F, -3.F, 0.F, 0.F, CellState::kStatic);
   const FusionConfig config;
-  const FusionResult result = fuse({moving, parked}, points.view(), config);
+  FusionResult result = fuse({moving, parked}, points.view(), config);
   ASSERT_EQ(result.objects.size(), 2U);
+  reportPerFrame(result, {moving, parked}, config.position);
 
   drawFusionOverlay(image, {moving, parked}, result, points.view(), config);
   // Left edge of each box (thickness 2), below the label: the motion colour.
@@ -62,8 +63,9 @@ TEST(Overlay, ANewTrackIsDrawnGrey)
   const FusionConfig config;
   FusionResult result = fuse({moving}, points.view(), config);
   ASSERT_EQ(result.objects.size(), 1U);
+  reportPerFrame(result, {moving}, config.position);
   result.tracked = true;
-  result.objects[0].track_state = TrackState::kTentative;
+  result.reports[0].track_state = TrackState::kTentative;
   drawFusionOverlay(image, {moving}, result, points.view(), config);
   const cv::Vec3b edge = at(image, 20, 100);
   EXPECT_EQ(edge[0], edge[1]);

@@ -486,8 +486,8 @@ TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
   FusionResult result;
   FusedObject object;
   object.detection_index = 0;
-  object.x = 10.0;
-  object.y = 2.0;
+  object.centre_x = 10.0;
+  object.centre_y = 2.0;
   object.grid = standingCells();
   object.length = 3.9;
   result.objects = {object};
@@ -501,14 +501,15 @@ TEST(Tracker, TrackObjectsMarksBoxesCutByTheImageEdge)
     trackObjects(tracker, k * kFramePeriodS, detections, 1242, ProjectedPointsView{}, r);
   }
   FusionResult cut = result;
-  cut.objects[0].x = 11.5;  // the visible part's centre
+  cut.objects[0].centre_x = 11.5;  // the visible part's centre
   detections[0].box.x_min = 0.F;
   trackObjects(tracker, 1.0, detections, 1242, ProjectedPointsView{}, cut);
-  ASSERT_EQ(cut.objects.size(), 1U);
-  EXPECT_LT(cut.objects[0].x, 10.5);
-  EXPECT_EQ(cut.objects[0].track_state, TrackState::kConfirmed);
-  EXPECT_EQ(cut.objects[0].motion, Motion::kStatic);
-  EXPECT_LT(cut.objects[0].p_dynamic, 0.5);
+  ASSERT_EQ(cut.reports.size(), 1U);
+  EXPECT_LT(cut.reports[0].x, 10.5);
+  EXPECT_EQ(cut.reports[0].track_state, TrackState::kConfirmed);
+  EXPECT_EQ(cut.reports[0].motion, Motion::kStatic);
+  EXPECT_LT(cut.reports[0].p_dynamic, 0.5);
+  EXPECT_DOUBLE_EQ(cut.objects[0].centre_x, 11.5) << "the fused object keeps its own centre";
   EXPECT_TRUE(cut.tracked);
 }
 
@@ -544,8 +545,8 @@ TEST(Tracker, TrackObjectsRegistersTheHitsOfTheGridsScan)
       FusionResult result;
       FusedObject object;
       object.detection_index = 0;
-      object.x = 10.5 + 0.3 * k;
-      object.y = 2.9;
+      object.centre_x = 10.5 + 0.3 * k;
+      object.centre_y = 2.9;
       object.grid = standingCells();
       for (std::uint32_t i = 0; i < points.size; ++i)
       {
@@ -555,7 +556,7 @@ TEST(Tracker, TrackObjectsRegistersTheHitsOfTheGridsScan)
       trackObjects(tracker, k * kFramePeriodS, detections, 1242, points, result);
       if (k > 0)  // the first image has no registration
       {
-        p_max = std::max(p_max, result.objects.at(0).p_dynamic);
+        p_max = std::max(p_max, result.reports.at(0).p_dynamic);
       }
     }
     return p_max;
@@ -777,8 +778,8 @@ TEST(Tracker, TrackObjectsKeepsTheScenesHitsForNewTracks)
       if (k == 3)
       {
         FusedObject object;
-        object.x = x0 + 2.0;
-        object.y = 2.9;
+        object.centre_x = x0 + 2.0;
+        object.centre_y = 2.9;
         object.grid = GridMotionEvidence{};
         for (std::uint32_t i = 0; i < points.size; ++i)
         {
@@ -789,7 +790,7 @@ TEST(Tracker, TrackObjectsKeepsTheScenesHitsForNewTracks)
       trackObjects(tracker, k * kFramePeriodS, detections, 1242, points, result);
       if (k == 3)
       {
-        return result.objects.at(0).p_dynamic;
+        return result.reports.at(0).p_dynamic;
       }
     }
     return -1.0;

@@ -1,6 +1,8 @@
 // Tests of the message <-> core conversions of the fusion (no master needed).
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
 #include <ros/time.h>
 
 #include "grid_vision_fusion/ros/fusion_conversions.h"
@@ -83,17 +85,24 @@ TEST(FusionConversions, ObjectsCarryEveryField)
   FusionResult result;
   FusedObject object;
   object.detection_index = 1;
-  object.motion = Motion::kDynamic;
   object.static_points = 1;
   object.dynamic_points = 2;
-  object.x = 5.0;
-  object.y = -1.0;
-  object.vx = 3.0;
-  object.vy = 4.0;
-  object.heading = 0.9272952;
-  object.p_dynamic = 0.875;
-  object.track_state = TrackState::kConfirmed;
   result.objects.push_back(object);
+  EXPECT_THROW(objectsToMsg(detections_msg.header, "world", detections, result), std::invalid_argument)
+      << "an object without its report";
+  ReportedObject report;
+  report.id = 0;
+  report.label = "car";
+  report.class_id = 2;
+  report.motion = Motion::kDynamic;
+  report.x = 5.0;
+  report.y = -1.0;
+  report.vx = 3.0;
+  report.vy = 4.0;
+  report.heading = 0.9272952;
+  report.p_dynamic = 0.875;
+  report.track_state = TrackState::kConfirmed;
+  result.reports.push_back(report);
 
   const DetectedObjectArray::Ptr msg = objectsToMsg(detections_msg.header, "world", detections, result);
   EXPECT_EQ(msg->header.stamp, ros::Time(100, 5));

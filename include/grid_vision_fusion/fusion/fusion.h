@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -126,53 +127,82 @@ struct FusionRegion
   bool contains(float u, float v) const { return u > u_min && u < u_max && v > v_min && v < v_max; }
 };
 
-/// The point-wise features of one non-empty fusion region.
+/// What the fusion finds of one detection's object in one image: its band's cells, their vote and
+/// its positions. Each field has one meaning and is set by one step (fuse(), estimateCentres(),
+/// placeOnGround()); what is reported of the object is its ReportedObject.
 struct FusedObject
 {
   std::size_t detection_index = 0;  ///< index of the box in the detection list
-  /// The object's id: its index in FusionResult::objects from fuse(), the track id once tracked.
-  std::uint32_t id = 0;
-  Motion motion = Motion::kUnknown;
+  /// Whether the object's band holds grid cells (kCells) or not (kBox: its position comes from its
+  /// box, placeOnGround()). Never kTrack: that is a report's (ReportedObject::support).
+  ObjectSupport support = ObjectSupport::kCells;
   std::uint32_t static_points = 0;   ///< static cells of the vote (region or cluster)
   std::uint32_t dynamic_points = 0;  ///< dynamic cells of the vote
-  double x = 0.0;                    ///< reported position x [m]: median_x from fuse(), then centre or track
-  double y = 0.0;                    ///< reported position y [m]
-  double median_x = 0.0;             ///< median x of all region points [m] (the paper's position)
-  double median_y = 0.0;             ///< median y of all region points [m]
-  double vx = 0.0;                   ///< median vx of the vote's dynamic points [m/s]; 0 unless kDynamic
-  double vy = 0.0;                   ///< median vy of the vote's dynamic points [m/s]; 0 unless kDynamic
-  double heading = 0.0;              ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+  /// The vote's verdict (decideMotion()): the paper's per-frame motion; kUnknown without cells.
+  Motion vote = Motion::kUnknown;
+  /// The vote's dynamic share d / (s + d), [0, 1]; 0.5 without cells.
+  double dynamic_share = 0.5;
+  /// Median velocity of the vote's dynamic cells [m/s], fixed frame; 0 unless the vote is kDynamic.
+  double vote_vx = 0.0;
+  double vote_vy = 0.0;
+  /// Median x, y of the band's cells [m] (the paper's position, the object's near face), from
+  /// fuse(); for an object without cells, its box's place on the ground (placeOnGround()), NaN
+  /// before.
+  double median_x = 0.0;
+  double median_y = 0.0;
+  /// The object's centre [m] (estimateCentres(), placeOnGround()); NaN before.
+  double centre_x = std::numeric_limits<double>::quiet_NaN();
+  double centre_y = std::numeric_limits<double>::quiet_NaN();
   /// The object's length [m] (CentreEstimate::length), set by estimateCentres(): where its box is
   /// cut by the image edge, how far its centre may lie off the estimate.
   double length = 0.0;
   /// What the grid says about the object's motion, from the cells of its cluster (gridEvidence()).
   GridMotionEvidence grid;
-  /// P(dynamic), [0, 1]: the track's (tracked), else the vote's dynamic share d / (s + d).
-  double p_dynamic = 0.5;
-  /// What its position and motion rest on: kCells when its band holds grid points; otherwise its
-  /// motion is kUnknown and its position comes from its box (placeOnGround()) or its track.
-  ObjectSupport support = ObjectSupport::kCells;
-  /// Tracked only: whether the object's track is tentative or confirmed.
-  TrackState track_state = TrackState::kNone;
-  /// Tracked only: the track's label (the one its objects had most often) and its detector class
-  /// index; empty: the detection's.
-  std::string label;
-  std::uint32_t class_id = 0;
   std::vector<std::uint32_t> members;  ///< indices of the region's valid points
   /// The object's own cells among the members: objectCluster() at centre.cluster_distance.
   std::vector<std::uint32_t> cluster;
 
+  /// Its position by `source`: the centre or the median (x, y) [m].
+  Eigen::Vector2d position(PositionSource source) const;
+};
+
+/// What is reported of one object of an image: the fields of its DetectedObject message. Made once
+/// per image: from the object's track (trackObjects()) or, in the paper's per-frame mode, from its
+/// fusion band alone (reportPerFrame()).
+struct ReportedObject
+{
+  /// The track id; per frame: the index of its detection (FusedObject::detection_index).
+  std::uint32_t id = 0;
+  /// The track's label (the one its objects had most often) and its detector class index; per
+  /// frame: the detection's.
+  std::string label;
+  std::uint32_t class_id = 0;
+  TrackState track_state = TrackState::kNone;  ///< kNone per frame
+  /// What its position and motion rest on: kCells, kTrack (no cells: its track's prediction) or
+  /// kBox (no cells and no track that knows where it is: its box's place on the ground).
+  ObjectSupport support = ObjectSupport::kCells;
+  Motion motion = Motion::kUnknown;
+  /// P(dynamic), [0, 1]: the track's; per frame the vote's dynamic share.
+  double p_dynamic = 0.5;
+  double x = 0.0;  ///< position [m], fixed frame
+  double y = 0.0;
+  double vx = 0.0;       ///< velocity [m/s]; 0 unless kDynamic
+  double vy = 0.0;       ///< velocity [m/s]; 0 unless kDynamic
+  double heading = 0.0;  ///< atan2(vy, vx) [rad]; 0 unless kDynamic
+
   double speed() const;
 };
 
-/// Result of fuse(): one object per detection, in detection order.
+/// Result of fuse(): one object per detection, in detection order; then one report per object.
 struct FusionResult
 {
   std::vector<FusedObject> objects;
+  /// reports[i] is objects[i]'s: empty after fuse(), made by reportPerFrame() or trackObjects().
+  std::vector<ReportedObject> reports;
   /// Points skipped because a coordinate, a velocity or the state was invalid (NaN/Inf,
   /// unknown state value).
   std::size_t invalid_points = 0;
-  /// The objects went through the tracker: ids are track ids, motion and state the track's.
+  /// The reports come from the tracker: ids are track ids, motion and state the track's.
   bool tracked = false;
 };
 
@@ -192,21 +222,20 @@ GridMotionEvidence gridEvidence(const ProjectedPointsView& points, const std::ve
 Motion decideMotion(std::uint32_t static_points, std::uint32_t dynamic_points, const FusionConfig& config);
 
 /// Fuses the detector boxes with the projected grid points: builds the fusion region of every
-/// box, collects the valid points inside it and computes its point-wise features (position:
-/// the median of the region, whatever config.position says; motion and velocity from the cells
-/// config.motion_vote names). A region without any point still gives its object, with motion
-/// kUnknown, support kBox and no position yet (NaN: placeOnGround() gives it one); ids are 0, 1,
-/// 2... in detection order. Points with a non-finite u, v, x or y, a non-finite
-/// velocity on a dynamic point, or a state that is neither STATIC nor DYNAMIC are skipped.
-/// `expected` (empty, or one list per detection): the cells the detection's track expects
-/// (Tracker::priors()), which objectCluster() prefers.
+/// box, collects the valid points inside it and computes its point-wise features (the median of
+/// the region; the vote, its share and velocity from the cells config.motion_vote names). A region
+/// without any point still gives its object, with vote kUnknown, support kBox and no position yet
+/// (NaN: placeOnGround() gives it one). No reports yet (reportPerFrame(), trackObjects()). Points with a
+/// non-finite u, v, x or y, a non-finite velocity on a dynamic point, or a state that is neither STATIC nor
+/// DYNAMIC are skipped. `expected` (empty, or one list per detection): the cells the detection's track
+/// expects (Tracker::priors()), which objectCluster() prefers.
 FusionResult fuse(const std::vector<Detection>& detections, const ProjectedPointsView& points,
                   const FusionConfig& config, const std::vector<std::vector<Eigen::Vector2d>>& expected = {});
 
-/// Sets the position (x, y) of every object of `result` to its centre: estimateCentre() over its
-/// members (centreOfCluster() of its cluster when fuse() has found one), with the footprint of its
-/// detection's label (config.footprints), seen from the camera at (`camera_x`, `camera_y`) in the frame of
-/// the points [m]. median_x, median_y stay.
+/// Sets the centre (centre_x, centre_y) and length of every object of `result` with cells:
+/// estimateCentre() over its members (centreOfCluster() of its cluster when fuse() has found one),
+/// with the footprint of its detection's label (config.footprints), seen from the camera at
+/// (`camera_x`, `camera_y`) in the frame of the points [m].
 /// @throws std::invalid_argument when an object's detection_index or members do not fit
 ///         `detections` and `points`.
 void estimateCentres(FusionResult& result, const std::vector<Detection>& detections,
@@ -235,13 +264,19 @@ struct ImageGround
 /// at the ground farther away or not at all (above the horizon).
 constexpr double kMaxBoxGroundRange = 150.0;
 
-/// Gives every object of `result` without cells (support kBox) a position from its box: the point
-/// of the ground plane its bottom-centre pixel looks at (ImageGround::groundPoint()), moved along
-/// the line of sight by half the mean of its label's footprint (`footprints`; none: 0), the centre
-/// of an object whose near face stands on the box's bottom edge. Without a valid `ground`, such
-/// objects keep no position (NaN).
+/// Gives every object of `result` without cells (support kBox) a position from its box, as its
+/// centre and its median: the point of the ground plane its bottom-centre pixel looks at
+/// (ImageGround::groundPoint()), moved along the line of sight by half the mean of its label's
+/// footprint (`footprints`; none: 0), the centre of an object whose near face stands on the box's
+/// bottom edge. Without a valid `ground`, such objects keep no position (NaN).
 void placeOnGround(FusionResult& result, const std::vector<Detection>& detections, const ImageGround& ground,
                    const std::map<std::string, Footprint>& footprints);
+
+/// The paper's per-frame mode: every object of `result` reported from its band alone: id its
+/// detection's index, the detection's label and class, the vote's verdict, share and velocity, and its
+/// position by `position` (support kBox objects: their place on the ground). Replaces
+/// result.reports; result.tracked becomes false.
+void reportPerFrame(FusionResult& result, const std::vector<Detection>& detections, PositionSource position);
 
 /// Checks that a detections/points pair can be fused: boxes finite, x_min <= x_max,
 /// y_min <= y_max and inside the image (1 px tolerance), and the image sizes of both inputs

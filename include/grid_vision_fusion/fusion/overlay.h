@@ -23,7 +23,8 @@ void drawProjectedPoints(cv::Mat& image, const ProjectedPointsView& points, int 
 /// of every box (thin rectangle), every box (thick, coloured by the motion of its object; grey
 /// when its region was empty or its track is tentative) and a label "dynamic car 4.2 m/s" /
 /// "static van"; for a tracked result with the track id, "#12 dynamic car 4.2 m/s", and
-/// "#13 static car (new track)" for a tentative one.
+/// "#13 static car (new track)" for a tentative one. Motion, label and speed are the objects'
+/// reports' (result.reports: reportPerFrame() or trackObjects()).
 void drawFusionOverlay(cv::Mat& image, const std::vector<Detection>& detections, const FusionResult& result,
                        const ProjectedPointsView& points, const FusionConfig& config);
 

@@ -30,7 +30,8 @@ ImageGround imageGroundOf(const ProjectedGrid& msg);
 
 /// The DetectedObjectArray of a fusion result: header.stamp = the image stamp,
 /// header.frame_id = `grid_frame_id`, image_frame_id = the camera frame of `image_header`;
-/// id = FusedObject::id (the index from fuse(), the track id once tracked).
+/// each object's fields from its report (result.reports), its cell counts from its FusedObject.
+/// @throws std::invalid_argument when result.reports does not hold one report per object.
 DetectedObjectArray::Ptr objectsToMsg(const std_msgs::Header& image_header, const std::string& grid_frame_id,
                                       const std::vector<Detection>& detections, const FusionResult& result);
 
