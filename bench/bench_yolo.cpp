@@ -1,29 +1,33 @@
-// Inference time of the real YOLOv3 (416, 608) and YOLOv3-tiny (416) architectures through
-// YoloDetector (preprocessing, OpenCV DNN forward pass, decoding, NMS) on a KITTI-sized image,
-// with random weights written in the Darknet format to a temporary directory (speed does not
-// depend on training). Reports ms per frame, achieved GFLOP/s (cv::dnn::Net::getFLOPS / time)
-// and the machine's peak.
+// Inference time of YOLO networks through YoloDetector (preprocessing, OpenCV DNN forward pass,
+// decoding, NMS) on a KITTI-sized image: by default the real YOLOv3 (416, 608) and YOLOv3-tiny
+// (416) architectures of models/yolo with random weights written in the Darknet format to a
+// temporary directory (speed does not depend on training). Reports ms per frame, achieved GFLOP/s
+// (cv::dnn::Net::getFLOPS / time) and the machine's peak.
 //
-// Every model runs twice: with the detector's default, the 3 × 3 stride-1 convolutions by the
-// Winograd layer (detection/winograd_convolution.h), and with OpenCV's own convolution for every
-// layer (names ending in "/opencv_conv"). The FLOP bound is the direct convolution's in both.
+// The 3 × 3 stride-1 convolutions run three ways: by the Winograd layer, the detector's default
+// (detection/winograd_convolution.h); by OpenCV's own convolution (names ending in
+// "/opencv_conv"); by oneDNN (bench/onednn_convolution.h, names ending in "/onednn"; only where
+// CMake found libdnnl-dev, otherwise the output says so and skips them). Before timing, the
+// network outputs of each variant are compared with OpenCV's convolution's on the benchmark
+// image (printed; a relative difference above 1e-3 is an error). The FLOP bound is the direct
+// convolution's in all.
 //
 // Run: devel/lib/grid_vision_fusion/bench_yolo [--benchmark_filter=tiny]
 //      devel/lib/grid_vision_fusion/bench_yolo --write-weights DIR   (writes yolov3-tiny.weights
 //      and yolov3.weights with these random values into DIR and exits: for run_pipeline
 //      --benchmark with a real network architecture)
 //      devel/lib/grid_vision_fusion/bench_yolo --profile [yolov3-416|yolov3-tiny-416|yolov3-608]
-//      [--opencv-conv]
+//      [--opencv-conv|--onednn]
 //      (per layer type: time from cv::dnn::Net::getPerfProfile, FLOPs, achieved GFLOP/s and the
 //      share of the frame; convolutions also by kernel size: where the time beyond the FLOP
 //      bound goes)
 //      devel/lib/grid_vision_fusion/bench_yolo --model M.onnx --input 640x192 [--model M2 --input WxH
-//      ...] [--weights W] [--class-names N] [--image FILE] [--iterations N] [--opencv-conv]
+//      ...] [--weights W] [--class-names N] [--image FILE] [--iterations N] [--opencv-conv] [--onednn]
 //      [--benchmark_repetitions=5 --benchmark_enable_random_interleaving=true]
-//      (trained models, e.g. those of scripts/fetch_model.sh, instead of the random Darknet ones:
-//      each --model with the --input (and --weights for a Darknet cfg) that follow it; several
-//      in one run for figures taken under the same load; on --image, a KITTI frame, or on a
-//      random image of KITTI's size)
+//      (other models, e.g. those of scripts/fetch_model.sh: each --model with the --input (and
+//      --weights for a Darknet cfg; without them, random weights) that follow it; several in one
+//      run for figures taken under the same load; --opencv-conv and --onednn add those variants
+//      of every model; on --image, a KITTI frame, or on a random image of KITTI's size)
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
@@ -40,15 +44,19 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "grid_vision_fusion/cli/machine_info.h"
 #include "grid_vision_fusion/detection/winograd_convolution.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
+#include "onednn_convolution.h"
 
 namespace
 {
@@ -107,28 +115,54 @@ double processCpuSeconds()
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+/// Which layer computes the 3 × 3 stride-1 convolutions.
+enum class Conv
+{
+  kWinograd,  ///< the detector's Winograd layer (its default)
+  kOpenCv,    ///< OpenCV's own convolution
+  kOnednn,    ///< oneDNN (bench/onednn_convolution.h)
+};
+
+/// The suffix of a variant's benchmark name.
+std::string suffix(Conv conv)
+{
+  return conv == Conv::kWinograd ? "" : conv == Conv::kOpenCv ? "/opencv_conv" : "/onednn";
+}
+
+/// While alive, networks built and first run compute their 3 × 3 stride-1 convolutions by `conv`.
+class ConvolutionScope
+{
+public:
+  explicit ConvolutionScope(Conv conv) : winograd_(conv == Conv::kWinograd)
+  {
+    if (conv == Conv::kOnednn)
+    {
+      onednn_.emplace();
+    }
+  }
+
+private:
+  WinogradConvolutionScope winograd_;
+  std::optional<bench::OnednnConvolutionScope> onednn_;
+};
+
+/// A detector whose 3 × 3 stride-1 convolutions are computed by `conv`.
+std::shared_ptr<YoloDetector> makeDetector(YoloDetectorConfig config, Conv conv)
+{
+  config.winograd = conv == Conv::kWinograd;
+  const ConvolutionScope scope(conv);  // OpenCV creates the layers in the constructor's forward pass
+  return std::make_shared<YoloDetector>(config);
+}
+
+/// A network of the default set: a Darknet cfg of models/yolo with random weights.
 struct Model
 {
   std::string name;
   std::string cfg;
   int input = 0;
   int iterations = 0;
-  bool winograd = true;  ///< false: OpenCV's convolution for every layer
+  Conv conv = Conv::kWinograd;
 };
-
-/// The detector configuration of a model of models/yolo with the given weights.
-YoloDetectorConfig darknetConfig(const Model& model, const std::string& weights)
-{
-  YoloDetectorConfig config;
-  config.model_path = kCfgDir + "/" + model.cfg;
-  config.weights_path = weights;
-  config.class_names_path = kCfgDir + "/coco.names";
-  config.input_width = model.input;
-  config.input_height = model.input;
-  config.score_threshold = 0.5;
-  config.winograd = model.winograd;
-  return config;
-}
 
 /// A random image of KITTI's size (1242 × 375), or the image at `path`.
 cv::Mat benchmarkImage(const std::string& path)
@@ -169,13 +203,6 @@ void benchmarkDetector(benchmark::State& state, YoloDetector& detector, const cv
   state.counters["FLOP_bound_ms"] = flops / (peak.peakGflops() * 1e9) * 1e3;
 }
 
-void benchmarkModel(benchmark::State& state, const YoloDetectorConfig& config, const cv::Mat& image,
-                    const MachineInfo& peak)
-{
-  YoloDetector detector(config);
-  benchmarkDetector(state, detector, image, peak);
-}
-
 /// Time and FLOPs of one group of layers over the profiled frames.
 struct LayerGroup
 {
@@ -196,7 +223,7 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
   std::vector<cv::Mat> outputs;
   cv::dnn::Net net;
   {
-    const WinogradConvolutionScope winograd(model.winograd);  // until the layers exist
+    const ConvolutionScope scope(model.conv);  // until the layers exist
     net = cv::dnn::readNetFromDarknet(kCfgDir + "/" + model.cfg, weights);
     net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
     net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
@@ -231,9 +258,9 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
     ++type.layers;
     type.ms += ms;
     type.flops += flops;
-    if (layer->type == kWinogradLayerType)
+    if (layer->type == kWinogradLayerType || layer->type == bench::kOnednnLayerType)
     {
-      LayerGroup& group = by_kernel["3x3 (Winograd)"];
+      LayerGroup& group = by_kernel[layer->type == kWinogradLayerType ? "3x3 (Winograd)" : "3x3 (oneDNN)"];
       ++group.layers;
       group.ms += ms;
       group.flops += flops;
@@ -280,127 +307,371 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
   return 0;
 }
 
-/// A trained model given on the command line.
+/// A network to time: one of the default set, or one given by --model.
 struct TrainedModel
 {
-  std::string model;
-  std::string weights;
-  int width = 0;
+  std::string model;    ///< ONNX file or Darknet cfg
+  std::string weights;  ///< Darknet weights; empty for a cfg: random ones (writeRandomWeights)
+  int width = 0;        ///< 0: the model's own input size
   int height = 0;
+  std::string name;    ///< benchmark name; empty: "<file>@<W>x<H>"
+  int iterations = 0;  ///< 0: Options::iterations
+  /// 0.25 for trained weights; 0.5 for random ones, whose scores spread widely: at 0.25 the
+  /// decoding and NMS of their many boxes would take most of the frame.
+  double score_threshold = 0.25;
 };
 
-/// The --model ... options (removed from argv, Google Benchmark's own flags left); false when
-/// there is none. @throws std::invalid_argument for a malformed option.
-bool parseTrainedModels(int& argc, char** argv, std::vector<TrainedModel>& models, std::string& class_names,
-                        std::string& image, int& iterations, bool& opencv_conv)
+/// The command line of the timing runs (everything but --profile and --write-weights).
+struct Options
 {
+  std::vector<TrainedModel> models;
+  std::string class_names;
+  std::string image;
+  int iterations = 10;
+  bool opencv_conv = false;
+  bool onednn = false;
+};
+
+/// The value of the option at argv[i] (i advanced to it). @throws std::invalid_argument at the end.
+std::string optionValue(int argc, char** argv, int& i)
+{
+  if (i + 1 >= argc)
+  {
+    throw std::invalid_argument(std::string(argv[i]) + " needs a value");
+  }
+  return argv[++i];
+}
+
+/// --input WxH or --weights W for the --model before it.
+void parseModelOption(const std::string& arg, const std::string& text, std::vector<TrainedModel>& models)
+{
+  if (models.empty())
+  {
+    throw std::invalid_argument(arg + " applies to the --model before it: give --model first");
+  }
+  if (arg == "--weights")
+  {
+    models.back().weights = text;
+    return;
+  }
+  char end = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%c", &models.back().width, &models.back().height, &end) != 2 ||
+      models.back().width <= 0 || models.back().height <= 0)
+  {
+    throw std::invalid_argument("--input wants WxH, e.g. 640x192, got \"" + text + "\"");
+  }
+}
+
+/// Parses this bench's options, removing them from argv (Google Benchmark's own flags are left).
+/// Without --model: the default set with every variant. @throws std::invalid_argument.
+Options parseOptions(int& argc, char** argv)
+{
+  Options options;
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-      {
-        throw std::invalid_argument(arg + " needs a value");
-      }
-      return argv[++i];
-    };
     if (arg == "--model")
     {
-      models.push_back({value(), "", 0, 0});
+      options.models.push_back({optionValue(argc, argv, i), "", 0, 0, "", 0, 0.25});
     }
     else if (arg == "--input" || arg == "--weights")
     {
-      if (models.empty())
-      {
-        throw std::invalid_argument(arg + " applies to the --model before it: give --model first");
-      }
-      const std::string text = value();
-      if (arg == "--weights")
-      {
-        models.back().weights = text;
-        continue;
-      }
-      char end = 0;
-      if (std::sscanf(text.c_str(), "%dx%d%c", &models.back().width, &models.back().height, &end) != 2 ||
-          models.back().width <= 0 || models.back().height <= 0)
-      {
-        throw std::invalid_argument("--input wants WxH, e.g. 640x192, got \"" + text + "\"");
-      }
+      parseModelOption(arg, optionValue(argc, argv, i), options.models);
     }
-    else if (arg == "--class-names")
+    else if (arg == "--class-names" || arg == "--image")
     {
-      class_names = value();
-    }
-    else if (arg == "--image")
-    {
-      image = value();
+      (arg == "--image" ? options.image : options.class_names) = optionValue(argc, argv, i);
     }
     else if (arg == "--iterations")
     {
-      iterations = std::atoi(value().c_str());
-      if (iterations <= 0)
+      options.iterations = std::atoi(optionValue(argc, argv, i).c_str());
+      if (options.iterations <= 0)
       {
         throw std::invalid_argument("--iterations wants a positive count");
       }
     }
-    else if (arg == "--opencv-conv")
+    else if (arg == "--opencv-conv" || arg == "--onednn")
     {
-      opencv_conv = true;
+      (arg == "--onednn" ? options.onednn : options.opencv_conv) = true;
     }
     else
     {
       rest.push_back(argv[i]);
     }
   }
-  if (models.empty())
+  argc = static_cast<int>(rest.size());
+  std::copy(rest.begin(), rest.end(), argv);
+  if (options.models.empty())
   {
-    if (!image.empty() || !class_names.empty())
+    if (!options.image.empty() || !options.class_names.empty())
     {
       throw std::invalid_argument("--image and --class-names apply to the models given by --model");
     }
-    return false;
+    options.models = {{kCfgDir + "/yolov3-tiny.cfg", "", 416, 416, "yolov3-tiny-416", 10, 0.5},
+                      {kCfgDir + "/yolov3.cfg", "", 416, 416, "yolov3-416", 3, 0.5},
+                      {kCfgDir + "/yolov3.cfg", "", 608, 608, "yolov3-608", 2, 0.5}};
+    options.opencv_conv = true;
+    options.onednn = true;
   }
-  argc = static_cast<int>(rest.size());
-  std::copy(rest.begin(), rest.end(), argv);
-  return true;
+  return options;
 }
 
-/// Registers one benchmark per trained model (and its /opencv_conv variant when asked), named
-/// after the model file and its input size.
-void registerTrainedModels(const std::vector<TrainedModel>& models, const std::string& class_names,
-                           const cv::Mat& image, int iterations, bool opencv_conv, const MachineInfo& peak)
+/// The variants to time: the Winograd layer, and OpenCV's and oneDNN's convolution where asked
+/// for (oneDNN where it was built).
+std::vector<Conv> variants(const Options& options)
 {
-  for (const TrainedModel& trained : models)
+  std::vector<Conv> convs{Conv::kWinograd};
+  if (options.opencv_conv)
   {
-    for (const bool winograd : {true, false})
+    convs.push_back(Conv::kOpenCv);
+  }
+  if (options.onednn && bench::onednnAvailable())
+  {
+    convs.push_back(Conv::kOnednn);
+  }
+  return convs;
+}
+
+/// The outputs of `model`'s network for `blob`, its 3 × 3 stride-1 convolutions by `conv`; of a
+/// Darknet region layer its input (the box sizes before exp(): with random weights the residual
+/// sums of yolov3 grow large enough that exp() overflows).
+std::vector<cv::Mat> networkOutputs(const TrainedModel& model, const cv::Mat& blob, Conv conv)
+{
+  const ConvolutionScope scope(conv);
+  cv::dnn::Net net = cv::dnn::readNet(model.model, model.weights);
+  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  std::vector<std::string> names = net.getUnconnectedOutLayersNames();
+  for (std::string& name : names)
+  {
+    const int id = net.getLayerId(name);
+    if (net.getLayer(id)->type == "Region")
     {
-      if (!winograd && !opencv_conv)
+      name = net.getLayerInputs(id).at(0)->name;
+    }
+  }
+  net.setInput(blob);
+  std::vector<cv::Mat> outputs;
+  net.forward(outputs, names);
+  for (cv::Mat& output : outputs)
+  {
+    output = output.clone();
+  }
+  return outputs;
+}
+
+/// Compares the network outputs of every variant with OpenCV's convolution's on `blob` and prints
+/// the largest difference. @throws std::runtime_error above 1e-3 of the largest output (or NaN).
+void checkOutputs(const TrainedModel& model, const std::string& name, const cv::Mat& blob,
+                  const std::vector<Conv>& convs)
+{
+  const std::vector<cv::Mat> reference = networkOutputs(model, blob, Conv::kOpenCv);
+  for (const Conv conv : convs)
+  {
+    if (conv == Conv::kOpenCv)
+    {
+      continue;
+    }
+    const std::vector<cv::Mat> outputs = networkOutputs(model, blob, conv);
+    double largest = 0.0;
+    double difference = 0.0;
+    for (std::size_t i = 0; i < reference.size() && i < outputs.size(); ++i)
+    {
+      largest = std::max(largest, cv::norm(reference[i], cv::NORM_INF));
+      difference = std::max(difference, cv::norm(reference[i], outputs[i], cv::NORM_INF));
+    }
+    const double relative = largest > 0.0 ? difference / largest : difference;
+    std::printf(
+        "check %s%s: network outputs differ from OpenCV's convolution's by at most %.3g (%.2g of "
+        "the largest, %.3g)\n",
+        name.c_str(), suffix(conv).c_str(), difference, relative, largest);
+    if (outputs.size() != reference.size() || !(relative <= 1e-3))  // NaN too
+    {
+      throw std::runtime_error(name + suffix(conv) +
+                               ": the network outputs differ from OpenCV's convolution's");
+    }
+  }
+}
+
+/// Loads every model in every variant (a missing or mismatched model file is an error before
+/// any run), checks the variants' outputs and registers one benchmark per model and variant,
+/// named after the model (file and input size) and the variant.
+void registerModels(const Options& options, const cv::Mat& image, const MachineInfo& peak)
+{
+  const std::vector<Conv> convs = variants(options);
+  for (const TrainedModel& trained : options.models)
+  {
+    YoloDetectorConfig config;
+    config.model_path = trained.model;
+    config.weights_path = trained.weights;
+    config.class_names_path = options.class_names.empty() ? kCfgDir + "/coco.names" : options.class_names;
+    config.input_width = trained.width;
+    config.input_height = trained.height;
+    config.score_threshold = trained.score_threshold;
+    std::string name = trained.name;
+    for (const Conv conv : convs)
+    {
+      const std::shared_ptr<YoloDetector> detector = makeDetector(config, conv);
+      if (name.empty())
       {
-        continue;
+        name = std::filesystem::path(trained.model).filename().string() + "@" +
+               std::to_string(detector->inputSize().width) + "x" +
+               std::to_string(detector->inputSize().height);
       }
-      YoloDetectorConfig config;
-      config.model_path = trained.model;
-      config.weights_path = trained.weights;
-      config.class_names_path = class_names.empty() ? kCfgDir + "/coco.names" : class_names;
-      config.input_width = trained.width;
-      config.input_height = trained.height;
-      config.score_threshold = 0.25;
-      config.winograd = winograd;
-      // Loaded here, so that a missing or mismatched model file is an error before any run.
-      const auto detector = std::make_shared<YoloDetector>(config);
-      const std::string size =
-          trained.width > 0 ? std::to_string(trained.width) + "x" + std::to_string(trained.height) : "cfg";
-      const std::string name = std::filesystem::path(trained.model).filename().string() + "@" + size +
-                               (winograd ? "" : "/opencv_conv");
-      benchmark::RegisterBenchmark(name.c_str(), [detector, image, peak](benchmark::State& state)
+      if (conv == convs.front() && convs.size() > 1)
+      {
+        InputTransform transform;
+        checkOutputs(trained, name, detector->makeInputBlob(image, PixelFormat::kBgr8, transform), convs);
+      }
+      benchmark::RegisterBenchmark((name + suffix(conv)).c_str(),
+                                   [detector, image, peak](benchmark::State& state)
                                    { benchmarkDetector(state, *detector, image, peak); })
           ->Unit(benchmark::kMillisecond)
-          ->Iterations(iterations)
+          ->Iterations(trained.iterations > 0 ? trained.iterations : options.iterations)
           ->MeasureProcessCPUTime()
           ->UseRealTime();
     }
+  }
+}
+
+/// A temporary directory, deleted with everything in it at the end of its scope.
+class TemporaryDirectory
+{
+public:
+  TemporaryDirectory()
+  {
+    char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
+    if (mkdtemp(pattern) == nullptr)
+    {
+      throw std::runtime_error("cannot create a temporary directory");
+    }
+    path_ = pattern;
+  }
+  ~TemporaryDirectory() { std::filesystem::remove_all(path_); }
+  TemporaryDirectory(const TemporaryDirectory&) = delete;
+  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+  const std::string& path() const { return path_; }
+
+private:
+  std::string path_;
+};
+
+/// Random weights (writeRandomWeights) for every Darknet cfg given without weights.
+void fillRandomWeights(std::vector<TrainedModel>& models, const std::string& directory)
+{
+  std::map<std::string, std::string> written;
+  for (TrainedModel& model : models)
+  {
+    if (model.weights.empty() && modelFormat(model.model) == ModelFormat::kDarknet)
+    {
+      std::string& weights = written[model.model];
+      if (weights.empty())
+      {
+        weights = writeRandomWeights(model.model, directory);
+      }
+      model.weights = weights;
+      model.score_threshold = 0.5;
+    }
+  }
+}
+
+/// --profile [MODEL] [--opencv-conv|--onednn].
+int profileMain(int argc, char** argv)
+{
+  const std::string last = argv[argc - 1];
+  const bool variant = last == "--opencv-conv" || last == "--onednn";
+  const std::string name = argc - (variant ? 1 : 0) == 3 ? argv[2] : "yolov3-416";
+  const std::map<std::string, Model> known{
+      {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},
+      {"yolov3-416", {"yolov3-416", "yolov3.cfg", 416, 5}},
+      {"yolov3-608", {"yolov3-608", "yolov3.cfg", 608, 3}}};
+  const auto model = known.find(name);
+  if (argc > 4 || (argc == 4 && !variant) || model == known.end())
+  {
+    std::fprintf(stderr,
+                 "bench_yolo: --profile [yolov3-tiny-416|yolov3-416|yolov3-608] [--opencv-conv|--onednn], "
+                 "not %s\n",
+                 name.c_str());
+    return 2;
+  }
+  Model profiled = model->second;
+  profiled.conv = !variant ? Conv::kWinograd : last == "--onednn" ? Conv::kOnednn : Conv::kOpenCv;
+  if (profiled.conv == Conv::kOnednn && !bench::onednnAvailable())
+  {
+    std::fprintf(stderr, "bench_yolo: %s\n", bench::onednnDescription().c_str());
+    return 2;
+  }
+  const MachineInfo machine = machineInfo();
+  cv::setNumThreads(machine.cores);
+  std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n",
+              machine.describe().c_str(), cv::getVersionString().c_str(), cv::getNumThreads(),
+              profiled.conv == Conv::kOnednn                            ? bench::onednnDescription().c_str()
+              : profiled.conv == Conv::kWinograd && winogradSupported() ? "Winograd F(2x2, 3x3)"
+                                                                        : "OpenCV's");
+  try
+  {
+    const TemporaryDirectory directory;
+    return profileModel(profiled, writeRandomWeights(kCfgDir + "/" + profiled.cfg, directory.path()), machine,
+                        profiled.iterations);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+    return 1;
+  }
+}
+
+/// --write-weights DIR.
+int writeWeightsMain(const std::string& directory)
+{
+  try
+  {
+    std::filesystem::create_directories(directory);
+    for (const char* cfg : {"/yolov3-tiny.cfg", "/yolov3.cfg"})
+    {
+      std::printf("%s\n", writeRandomWeights(kCfgDir + cfg, directory).c_str());
+    }
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "bench_yolo: %s\n", e.what());
+    return 1;
+  }
+}
+
+/// The machine, its peak, OpenCV and the convolution variants: printed and in the benchmark's
+/// context.
+void describeSetup(const MachineInfo& peak)
+{
+  std::ostringstream peak_text;
+  peak_text << peak.cores << " cores x " << peak.mhz / 1000.0 << " GHz x " << peak.flopsPerCycle()
+            << " FP32 FLOP/cycle = " << peak.peakGflops() << " GFLOP/s";
+  const std::string opencv = cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads";
+  const std::string winograd =
+      winogradSupported() ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv or /onednn"
+                          : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution instead";
+  benchmark::AddCustomContext("machine", peak.describe());
+  benchmark::AddCustomContext("peak", peak_text.str());
+  benchmark::AddCustomContext("opencv", opencv);
+  benchmark::AddCustomContext("winograd", winograd);
+  benchmark::AddCustomContext("onednn", bench::onednnDescription());
+  std::printf("machine: %s\nopencv: %s\nonednn: %s\n", peak.describe().c_str(), opencv.c_str(),
+              bench::onednnDescription().c_str());
+  std::fflush(stdout);
+}
+
+/// oneDNN's OpenMP threads spin after every primitive (libgomp's default), on the cores that the
+/// OpenCV layers in between need (yolov3-tiny's forward pass 329 instead of 135 ms on 2 loaded
+/// cores). libgomp reads its settings when it loads: the bench sets OMP_WAIT_POLICY=PASSIVE
+/// unless it is set and runs itself again.
+void passiveOpenMp(char** argv)
+{
+  if (bench::onednnAvailable() && std::getenv("OMP_WAIT_POLICY") == nullptr)
+  {
+    setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+    execv("/proc/self/exe", argv);  // returns only where it failed: then the run goes on as it is
   }
 }
 
@@ -408,105 +679,36 @@ void registerTrainedModels(const std::vector<TrainedModel>& models, const std::s
 
 int main(int argc, char** argv)
 {
-  if (argc >= 2 && argc <= 4 && std::string(argv[1]) == "--profile")
+  passiveOpenMp(argv);
+  if (argc >= 2 && std::string(argv[1]) == "--profile")
   {
-    const bool opencv_conv = std::string(argv[argc - 1]) == "--opencv-conv";
-    if (argc == 4 && !opencv_conv)
-    {
-      std::fprintf(stderr, "bench_yolo: --profile [MODEL] [--opencv-conv], not %s\n", argv[3]);
-      return 2;
-    }
-    const std::string name = argc - (opencv_conv ? 1 : 0) == 3 ? argv[2] : "yolov3-416";
-    const std::map<std::string, Model> known{
-        {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},
-        {"yolov3-416", {"yolov3-416", "yolov3.cfg", 416, 5}},
-        {"yolov3-608", {"yolov3-608", "yolov3.cfg", 608, 3}}};
-    const auto model = known.find(name);
-    if (model == known.end())
-    {
-      std::fprintf(stderr, "bench_yolo: --profile takes yolov3-tiny-416, yolov3-416 or yolov3-608, not %s\n",
-                   name.c_str());
-      return 2;
-    }
-    Model profiled = model->second;
-    profiled.winograd = !opencv_conv;
-    const MachineInfo machine = machineInfo();
-    cv::setNumThreads(machine.cores);
-    std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n",
-                machine.describe().c_str(), cv::getVersionString().c_str(), cv::getNumThreads(),
-                profiled.winograd && winogradSupported() ? "Winograd F(2x2, 3x3)" : "OpenCV's");
-    char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
-    if (mkdtemp(pattern) == nullptr)
-    {
-      std::fprintf(stderr, "bench_yolo: cannot create a temporary directory\n");
-      return 1;
-    }
-    int status = 1;
-    try
-    {
-      status = profileModel(profiled, writeRandomWeights(kCfgDir + "/" + profiled.cfg, pattern), machine,
-                            profiled.iterations);
-    }
-    catch (const std::exception& e)
-    {
-      std::fprintf(stderr, "bench_yolo: %s\n", e.what());
-    }
-    std::filesystem::remove_all(pattern);
-    return status;
+    return profileMain(argc, argv);
   }
   if (argc == 3 && std::string(argv[1]) == "--write-weights")
   {
-    try
-    {
-      std::filesystem::create_directories(argv[2]);
-      for (const char* cfg : {"/yolov3-tiny.cfg", "/yolov3.cfg"})
-      {
-        std::printf("%s\n", writeRandomWeights(kCfgDir + cfg, argv[2]).c_str());
-      }
-      return 0;
-    }
-    catch (const std::exception& e)
-    {
-      std::fprintf(stderr, "bench_yolo: %s\n", e.what());
-      return 1;
-    }
+    return writeWeightsMain(argv[2]);
   }
   const MachineInfo peak = machineInfo();
   cv::setNumThreads(peak.cores);
-  std::ostringstream peak_text;
-  peak_text << peak.cores << " cores x " << peak.mhz / 1000.0 << " GHz x " << peak.flopsPerCycle()
-            << " FP32 FLOP/cycle = " << peak.peakGflops() << " GFLOP/s";
-  benchmark::AddCustomContext("machine", peak.describe());
-  benchmark::AddCustomContext("peak", peak_text.str());
-  benchmark::AddCustomContext(
-      "opencv", cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads");
-  benchmark::AddCustomContext("winograd",
-                              winogradSupported()
-                                  ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv"
-                                  : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution in both");
-
-  std::printf("machine: %s\nopencv: %s, %d threads\n", peak.describe().c_str(),
-              cv::getVersionString().c_str(), cv::getNumThreads());
-  std::fflush(stdout);
-
-  std::vector<TrainedModel> trained;
-  std::string class_names, image_path;
-  int iterations = 10;
-  bool opencv_conv = false;
+  describeSetup(peak);
   try
   {
-    if (parseTrainedModels(argc, argv, trained, class_names, image_path, iterations, opencv_conv))
+    Options options = parseOptions(argc, argv);
+    const TemporaryDirectory directory;
+    fillRandomWeights(options.models, directory.path());
+    registerModels(options, benchmarkImage(options.image), peak);
+    if (options.onednn && bench::onednnAvailable())
     {
-      registerTrainedModels(trained, class_names, benchmarkImage(image_path), iterations, opencv_conv, peak);
-      benchmark::Initialize(&argc, argv);
-      if (benchmark::ReportUnrecognizedArguments(argc, argv))
-      {
-        return 2;
-      }
-      benchmark::RunSpecifiedBenchmarks();
-      benchmark::Shutdown();
-      return 0;
+      std::printf("onednn implementations: %s\n", bench::onednnImplementations().c_str());
     }
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+    {
+      return 2;
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
   }
   catch (const std::invalid_argument& e)
   {
@@ -518,46 +720,4 @@ int main(int argc, char** argv)
     std::fprintf(stderr, "bench_yolo: %s\n", e.what());
     return 1;
   }
-
-  char pattern[] = "/tmp/gvf_bench_yolo_XXXXXX";
-  if (mkdtemp(pattern) == nullptr)
-  {
-    std::fprintf(stderr, "cannot create a temporary directory\n");
-    return 1;
-  }
-  const std::string directory = pattern;
-  const std::vector<Model> models{{"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 10, true},
-                                  {"yolov3-tiny-416/opencv_conv", "yolov3-tiny.cfg", 416, 10, false},
-                                  {"yolov3-416", "yolov3.cfg", 416, 3, true},
-                                  {"yolov3-416/opencv_conv", "yolov3.cfg", 416, 3, false},
-                                  {"yolov3-608", "yolov3.cfg", 608, 2, true},
-                                  {"yolov3-608/opencv_conv", "yolov3.cfg", 608, 2, false}};
-  int status = 0;
-  try
-  {
-    const std::string tiny_weights = writeRandomWeights(kCfgDir + "/yolov3-tiny.cfg", directory);
-    const std::string yolov3_weights = writeRandomWeights(kCfgDir + "/yolov3.cfg", directory);
-    for (const Model& model : models)
-    {
-      const std::string weights = model.cfg == "yolov3.cfg" ? yolov3_weights : tiny_weights;
-      const YoloDetectorConfig config = darknetConfig(model, weights);
-      const cv::Mat image = benchmarkImage("");
-      benchmark::RegisterBenchmark(model.name.c_str(), [config, image, peak](benchmark::State& state)
-                                   { benchmarkModel(state, config, image, peak); })
-          ->Unit(benchmark::kMillisecond)
-          ->Iterations(model.iterations)
-          ->MeasureProcessCPUTime()
-          ->UseRealTime();
-    }
-    benchmark::Initialize(&argc, argv);
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-  }
-  catch (const std::exception& e)
-  {
-    std::fprintf(stderr, "bench_yolo: %s\n", e.what());
-    status = 1;
-  }
-  std::filesystem::remove_all(directory);
-  return status;
 }

