@@ -4,30 +4,30 @@
 // temporary directory (speed does not depend on training). Reports ms per frame, achieved GFLOP/s
 // (cv::dnn::Net::getFLOPS / time) and the machine's peak.
 //
-// The 3 × 3 stride-1 convolutions run three ways: by the Winograd layer, the detector's default
-// (detection/winograd_convolution.h); by OpenCV's own convolution (names ending in
-// "/opencv_conv"); by oneDNN (bench/onednn_convolution.h, names ending in "/onednn"; only where
-// CMake found libdnnl-dev, otherwise the output says so and skips them). Before timing, the
-// network outputs of each variant are compared with OpenCV's convolution's on the benchmark
-// image (printed; a relative difference above 1e-3 is an error). The FLOP bound is the direct
-// convolution's in all.
+// The 3 × 3 stride-1 convolutions run two ways: by OpenCV's own convolution, as the detector runs
+// them, and by oneDNN (bench/onednn_convolution.h, names ending in "/onednn"; only where CMake
+// found libdnnl-dev, otherwise the output says so and skips them). Before timing, the network
+// outputs of the oneDNN variant are compared with OpenCV's on the benchmark image (printed; a
+// relative difference above 1e-3 is an error). The FLOP bound is the direct convolution's in
+// both. (Until issue 44 a third variant, the detector's own Winograd layer, ran as well:
+// doc/decisions/0027-winograd-layer.md.)
 //
 // Run: devel/lib/grid_vision_fusion/bench_yolo [--benchmark_filter=tiny]
 //      devel/lib/grid_vision_fusion/bench_yolo --write-weights DIR   (writes yolov3-tiny.weights
 //      and yolov3.weights with these random values into DIR and exits: for run_pipeline
 //      --benchmark with a real network architecture)
 //      devel/lib/grid_vision_fusion/bench_yolo --profile [yolov3-416|yolov3-tiny-416|yolov3-608]
-//      [--opencv-conv|--onednn]
+//      [--onednn]
 //      (per layer type: time from cv::dnn::Net::getPerfProfile, FLOPs, achieved GFLOP/s and the
 //      share of the frame; convolutions also by kernel size: where the time beyond the FLOP
 //      bound goes)
 //      devel/lib/grid_vision_fusion/bench_yolo --model M.onnx --input 640x192 [--model M2 --input WxH
-//      ...] [--weights W] [--class-names N] [--image FILE] [--iterations N] [--opencv-conv] [--onednn]
+//      ...] [--weights W] [--class-names N] [--image FILE] [--iterations N] [--onednn]
 //      [--benchmark_repetitions=5 --benchmark_enable_random_interleaving=true]
 //      (other models, e.g. those of scripts/fetch_model.sh: each --model with the --input (and
 //      --weights for a Darknet cfg; without them, random weights) that follow it; several in one
-//      run for figures taken under the same load; --opencv-conv and --onednn add those variants
-//      of every model; on --image, a KITTI frame, or on a random image of KITTI's size)
+//      run for figures taken under the same load; --onednn adds that variant of every model; on
+//      --image, a KITTI frame, or on a random image of KITTI's size)
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
@@ -54,7 +54,6 @@
 #include <unistd.h>
 
 #include "grid_vision_fusion/cli/machine_info.h"
-#include "grid_vision_fusion/detection/winograd_convolution.h"
 #include "grid_vision_fusion/detection/yolo_detector.h"
 #include "onednn_convolution.h"
 
@@ -118,22 +117,21 @@ double processCpuSeconds()
 /// Which layer computes the 3 × 3 stride-1 convolutions.
 enum class Conv
 {
-  kWinograd,  ///< the detector's Winograd layer (its default)
-  kOpenCv,    ///< OpenCV's own convolution
-  kOnednn,    ///< oneDNN (bench/onednn_convolution.h)
+  kOpenCv,  ///< OpenCV's own convolution, as the detector runs it
+  kOnednn,  ///< oneDNN (bench/onednn_convolution.h)
 };
 
 /// The suffix of a variant's benchmark name.
 std::string suffix(Conv conv)
 {
-  return conv == Conv::kWinograd ? "" : conv == Conv::kOpenCv ? "/opencv_conv" : "/onednn";
+  return conv == Conv::kOnednn ? "/onednn" : "";
 }
 
 /// While alive, networks built and first run compute their 3 × 3 stride-1 convolutions by `conv`.
 class ConvolutionScope
 {
 public:
-  explicit ConvolutionScope(Conv conv) : winograd_(conv == Conv::kWinograd)
+  explicit ConvolutionScope(Conv conv)
   {
     if (conv == Conv::kOnednn)
     {
@@ -142,14 +140,12 @@ public:
   }
 
 private:
-  WinogradConvolutionScope winograd_;
   std::optional<bench::OnednnConvolutionScope> onednn_;
 };
 
 /// A detector whose 3 × 3 stride-1 convolutions are computed by `conv`.
 std::shared_ptr<YoloDetector> makeDetector(YoloDetectorConfig config, Conv conv)
 {
-  config.winograd = conv == Conv::kWinograd;
   const ConvolutionScope scope(conv);  // OpenCV creates the layers in the constructor's forward pass
   return std::make_shared<YoloDetector>(config);
 }
@@ -161,7 +157,7 @@ struct Model
   std::string cfg;
   int input = 0;
   int iterations = 0;
-  Conv conv = Conv::kWinograd;
+  Conv conv = Conv::kOpenCv;
 };
 
 /// A random image of KITTI's size (1242 × 375), or the image at `path`.
@@ -258,9 +254,9 @@ int profileModel(const Model& model, const std::string& weights, const MachineIn
     ++type.layers;
     type.ms += ms;
     type.flops += flops;
-    if (layer->type == kWinogradLayerType || layer->type == bench::kOnednnLayerType)
+    if (layer->type == bench::kOnednnLayerType)
     {
-      LayerGroup& group = by_kernel[layer->type == kWinogradLayerType ? "3x3 (Winograd)" : "3x3 (oneDNN)"];
+      LayerGroup& group = by_kernel["3x3 (oneDNN)"];
       ++group.layers;
       group.ms += ms;
       group.flops += flops;
@@ -328,7 +324,6 @@ struct Options
   std::string class_names;
   std::string image;
   int iterations = 10;
-  bool opencv_conv = false;
   bool onednn = false;
 };
 
@@ -391,9 +386,9 @@ Options parseOptions(int& argc, char** argv)
         throw std::invalid_argument("--iterations wants a positive count");
       }
     }
-    else if (arg == "--opencv-conv" || arg == "--onednn")
+    else if (arg == "--onednn")
     {
-      (arg == "--onednn" ? options.onednn : options.opencv_conv) = true;
+      options.onednn = true;
     }
     else
     {
@@ -411,21 +406,15 @@ Options parseOptions(int& argc, char** argv)
     options.models = {{kCfgDir + "/yolov3-tiny.cfg", "", 416, 416, "yolov3-tiny-416", 10, 0.5},
                       {kCfgDir + "/yolov3.cfg", "", 416, 416, "yolov3-416", 3, 0.5},
                       {kCfgDir + "/yolov3.cfg", "", 608, 608, "yolov3-608", 2, 0.5}};
-    options.opencv_conv = true;
     options.onednn = true;
   }
   return options;
 }
 
-/// The variants to time: the Winograd layer, and OpenCV's and oneDNN's convolution where asked
-/// for (oneDNN where it was built).
+/// The variants to time: OpenCV's convolution, and oneDNN's where asked for and built.
 std::vector<Conv> variants(const Options& options)
 {
-  std::vector<Conv> convs{Conv::kWinograd};
-  if (options.opencv_conv)
-  {
-    convs.push_back(Conv::kOpenCv);
-  }
+  std::vector<Conv> convs{Conv::kOpenCv};
   if (options.onednn && bench::onednnAvailable())
   {
     convs.push_back(Conv::kOnednn);
@@ -576,11 +565,11 @@ void fillRandomWeights(std::vector<TrainedModel>& models, const std::string& dir
   }
 }
 
-/// --profile [MODEL] [--opencv-conv|--onednn].
+/// --profile [MODEL] [--onednn].
 int profileMain(int argc, char** argv)
 {
   const std::string last = argv[argc - 1];
-  const bool variant = last == "--opencv-conv" || last == "--onednn";
+  const bool variant = last == "--onednn";
   const std::string name = argc - (variant ? 1 : 0) == 3 ? argv[2] : "yolov3-416";
   const std::map<std::string, Model> known{
       {"yolov3-tiny-416", {"yolov3-tiny-416", "yolov3-tiny.cfg", 416, 20}},
@@ -590,13 +579,13 @@ int profileMain(int argc, char** argv)
   if (argc > 4 || (argc == 4 && !variant) || model == known.end())
   {
     std::fprintf(stderr,
-                 "bench_yolo: --profile [yolov3-tiny-416|yolov3-416|yolov3-608] [--opencv-conv|--onednn], "
+                 "bench_yolo: --profile [yolov3-tiny-416|yolov3-416|yolov3-608] [--onednn], "
                  "not %s\n",
                  name.c_str());
     return 2;
   }
   Model profiled = model->second;
-  profiled.conv = !variant ? Conv::kWinograd : last == "--onednn" ? Conv::kOnednn : Conv::kOpenCv;
+  profiled.conv = variant ? Conv::kOnednn : Conv::kOpenCv;
   if (profiled.conv == Conv::kOnednn && !bench::onednnAvailable())
   {
     std::fprintf(stderr, "bench_yolo: %s\n", bench::onednnDescription().c_str());
@@ -606,9 +595,7 @@ int profileMain(int argc, char** argv)
   cv::setNumThreads(machine.cores);
   std::printf("machine: %s\nopencv: %s, %d threads, 3x3 stride-1 convolutions: %s\n",
               machine.describe().c_str(), cv::getVersionString().c_str(), cv::getNumThreads(),
-              profiled.conv == Conv::kOnednn                            ? bench::onednnDescription().c_str()
-              : profiled.conv == Conv::kWinograd && winogradSupported() ? "Winograd F(2x2, 3x3)"
-                                                                        : "OpenCV's");
+              profiled.conv == Conv::kOnednn ? bench::onednnDescription().c_str() : "OpenCV's");
   try
   {
     const TemporaryDirectory directory;
@@ -649,13 +636,9 @@ void describeSetup(const MachineInfo& peak)
   peak_text << peak.cores << " cores x " << peak.mhz / 1000.0 << " GHz x " << peak.flopsPerCycle()
             << " FP32 FLOP/cycle = " << peak.peakGflops() << " GFLOP/s";
   const std::string opencv = cv::getVersionString() + ", " + std::to_string(cv::getNumThreads()) + " threads";
-  const std::string winograd =
-      winogradSupported() ? "3x3 stride-1 convolutions by Winograd F(2x2, 3x3) unless /opencv_conv or /onednn"
-                          : "not supported on this CPU (no AVX2/FMA): OpenCV's convolution instead";
   benchmark::AddCustomContext("machine", peak.describe());
   benchmark::AddCustomContext("peak", peak_text.str());
   benchmark::AddCustomContext("opencv", opencv);
-  benchmark::AddCustomContext("winograd", winograd);
   benchmark::AddCustomContext("onednn", bench::onednnDescription());
   std::printf("machine: %s\nopencv: %s\nonednn: %s\n", peak.describe().c_str(), opencv.c_str(),
               bench::onednnDescription().c_str());

@@ -16,7 +16,7 @@ gvf_gtest(test_grid
   LINK grid_vision_fusion_core gvf_box_world_lidar)
 gvf_gtest(test_detection
   SOURCES test/detection/test_yolo_detector.cpp test/detection/test_kitti_labels.cpp
-    test/detection/test_detection_replay.cpp test/detection/test_winograd_convolution.cpp
+    test/detection/test_detection_replay.cpp
     test/detection/test_yolo_onnx_model.cpp test/detection/test_onnx_input.cpp
   LINK grid_vision_fusion_core gvf_tiny_darknet
   DEFINITIONS GVF_MODEL_DIR="${PROJECT_SOURCE_DIR}/models/yolo")

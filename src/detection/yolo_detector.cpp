@@ -1,7 +1,5 @@
 #include "grid_vision_fusion/detection/yolo_detector.h"
 
-#include "grid_vision_fusion/detection/winograd_convolution.h"
-
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -306,10 +304,6 @@ YoloDetector::YoloDetector(const YoloDetectorConfig& config) : config_(config)
 {
   config_.validate();
   class_names_ = readClassNames(config_.class_names_path);
-  // OpenCV creates the layers at the first forward pass: the scope lasts until the probe below.
-  const WinogradConvolutionScope winograd(config_.winograd && config_.backend == "opencv" &&
-                                          config_.target == "cpu");
-  winograd_used_ = winograd.active();
   const bool darknet = modelFormat(config_.model_path) == ModelFormat::kDarknet;
   try
   {
@@ -450,8 +444,7 @@ std::string YoloDetector::description() const
 {
   return config_.model_path + " (" + std::to_string(class_names_.size()) + " classes), input " +
          std::to_string(input_size_.width) + "x" + std::to_string(input_size_.height) + " " +
-         toString(config_.resize_mode) + ", " + backendDescription() +
-         (winograd_used_ ? ", Winograd 3x3" : "");
+         toString(config_.resize_mode) + ", " + backendDescription();
 }
 
 std::int64_t YoloDetector::flops()

@@ -24,7 +24,7 @@ GTEST = """<?xml version="1.0" encoding="UTF-8"?>
   <testsuite name="Winograd" tests="4" failures="1" disabled="1" skipped="1" errors="0">
     <testcase name="Equal" status="run" result="completed" classname="Winograd" />
     <testcase name="NeedsAvx2" status="run" result="skipped" classname="Winograd">
-      <skipped message="test/detection/test_winograd_convolution.cpp:150&#x0A;this CPU lacks AVX2/FMA"><![CDATA[
+      <skipped message="test/detection/test_yolo_onnx_model.cpp:150&#x0A;this CPU lacks AVX2/FMA"><![CDATA[
 this CPU lacks AVX2/FMA]]></skipped>
     </testcase>
     <testcase name="DISABLED_Slow" status="notrun" result="suppressed" classname="Winograd" />
@@ -88,7 +88,7 @@ class SummaryTest(unittest.TestCase):
         lines = done.stdout.strip().splitlines()
         self.assertEqual(lines[-1], "2 passed, 2 failed")
         self.assertEqual(lines[-2], "3 skipped")
-        self.assertIn("SKIPPED: Winograd.NeedsAvx2 (test/detection/test_winograd_convolution.cpp:150 this CPU lacks "
+        self.assertIn("SKIPPED: Winograd.NeedsAvx2 (test/detection/test_yolo_onnx_model.cpp:150 this CPU lacks "
                       "AVX2/FMA)", lines)
         self.assertIn("SKIPPED: Winograd.DISABLED_Slow (not run (suppressed))", lines)
         self.assertIn("SKIPPED: test_yolov5s_model.RealModelTest.test_finds_the_labelled_objects (the model is not "

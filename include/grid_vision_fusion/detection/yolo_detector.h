@@ -93,10 +93,6 @@ struct YoloDetectorConfig
   /// OpenCV DNN target: "cpu" (default), "opencl", "opencl_fp16", "cuda", "cuda_fp16".
   /// A backend/target that this OpenCV build lacks falls back to opencv/cpu with a warning.
   std::string target = "cpu";
-  /// Compute the 3 × 3 stride-1 convolutions with Winograd's F(2 × 2, 3 × 3) (opencv/cpu only,
-  /// a CPU with AVX2 and FMA; detection/winograd_convolution.h): 2.25 × fewer multiplications,
-  /// results equal up to float rounding. false: OpenCV's own convolution for every layer.
-  bool winograd = true;
   /// Class filter and renaming: model class name → published label (e.g. "truck" → "truck",
   /// "bus" → "van"). Empty: every class kept under its own name. Otherwise classes not in the
   /// map are dropped.
@@ -300,7 +296,6 @@ private:
   cv::Size input_size_;
   YoloOutputLayout layout_ = YoloOutputLayout::kOpenCvRegion;
   std::string backend_used_ = "opencv";
-  bool winograd_used_ = false;  ///< 3 × 3 stride-1 convolutions by WinogradConvolutionScope
   std::string target_used_ = "cpu";
   std::vector<std::string> warnings_;
 };

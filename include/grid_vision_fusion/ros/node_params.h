@@ -230,7 +230,6 @@ void visitParams(DetectorParams& p, Visitor& v)
   v("onnx_layout", p.yolo.onnx_layout);
   v("dnn_backend", p.yolo.backend);
   v("dnn_target", p.yolo.target);
-  v("winograd", p.yolo.winograd);
   v("class_map", p.yolo.class_map);
   v("rider_merge", p.yolo.rider_merge);
   v("rider_class", p.yolo.rider_class);
