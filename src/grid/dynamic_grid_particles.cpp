@@ -47,7 +47,7 @@ enum Pass : std::uint32_t
 // < 1.2e-9), p in (0, 1): the values of the normal table. Kept, rather than normalQuantile()
 // (include/grid_vision_fusion/normal_quantile.h, Boost.Math), so that the table and with it the
 // filter's output stay as they are: the more accurate Boost quantile differs in 574 of the 65536
-// floats of the table, by one ulp each.
+// floats of the table, by one ulp each (doc/decisions/0028-normal-table.md).
 double inverseNormalCdf(double p)
 {
   static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
