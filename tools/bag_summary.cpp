@@ -289,17 +289,10 @@ void printSummary(const Summary& summary, const Options& o)
 int main(int argc, char** argv)
 {
   Options o;
-  try
+  if (const auto status = grid_vision_fusion::readCommandLine("bag_summary", kUsage, kExitFailure,
+                                                              [&] { return parseArguments(argc, argv, o); }))
   {
-    if (!parseArguments(argc, argv, o))
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  catch (const grid_vision_fusion::UsageError& e)
-  {
-    return grid_vision_fusion::usageFailure("bag_summary", e.what(), kUsage, kExitFailure);
+    return *status;
   }
   try
   {

@@ -381,17 +381,10 @@ int run(const Options& o)
 int main(int argc, char** argv)
 {
   Options options;
-  try
+  if (const auto status =
+          gvf::readCommandLine("evaluate", kUsage, 2, [&] { return parseArguments(argc, argv, options); }))
   {
-    if (!parseArguments(argc, argv, options))
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  catch (const UsageError& e)
-  {
-    return gvf::usageFailure("evaluate", e.what(), kUsage, 2);
+    return *status;
   }
   try
   {

@@ -141,17 +141,10 @@ int main(int argc, char** argv)
 {
   grid_vision_fusion::KittiBagOptions options;
   bool quiet = false;
-  try
+  if (const auto status = grid_vision_fusion::readCommandLine(
+          "kitti_to_bag", kUsage, kExitUsage, [&] { return parseArguments(argc, argv, options, quiet); }))
   {
-    if (!parseArguments(argc, argv, options, quiet))
-    {
-      std::cout << kUsage;
-      return EXIT_SUCCESS;
-    }
-  }
-  catch (const UsageError& e)
-  {
-    return grid_vision_fusion::usageFailure("kitti_to_bag", e.what(), kUsage, kExitUsage);
+    return *status;
   }
 
   ros::Time::init();

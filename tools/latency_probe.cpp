@@ -76,17 +76,10 @@ int main(int argc, char** argv)
   // ros::init takes the ROS remapping arguments (name:=value) out of argv first.
   ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
   Options o;
-  try
+  if (const auto status = grid_vision_fusion::readCommandLine("latency_probe", kUsage, 1,
+                                                              [&] { return parseArguments(argc, argv, o); }))
   {
-    if (!parseArguments(argc, argv, o))
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  catch (const grid_vision_fusion::UsageError& e)
-  {
-    return grid_vision_fusion::usageFailure("latency_probe", e.what(), kUsage, 1);
+    return *status;
   }
   const std::string& output = o.output;
   std::FILE* out = std::fopen(output.c_str(), "w");

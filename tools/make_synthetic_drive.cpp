@@ -146,17 +146,10 @@ int main(int argc, char** argv)
   try
   {
     Arguments args;
-    try
+    if (const auto status = readCommandLine("make_synthetic_drive", kUsage, 1,
+                                            [&] { return parseArguments(argc, argv, args); }))
     {
-      if (!parseArguments(argc, argv, args))
-      {
-        std::cout << kUsage;
-        return 0;
-      }
-    }
-    catch (const UsageError& e)
-    {
-      return usageFailure("make_synthetic_drive", e.what(), kUsage, 1);
+      return *status;
     }
     const SyntheticScenario scenario = loadArgumentsScenario(args);
     const SyntheticDriveOptions& options = args.options;

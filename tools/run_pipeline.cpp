@@ -429,17 +429,10 @@ int run(const Options& o)
 int main(int argc, char** argv)
 {
   Options o;
-  try
+  if (const auto status =
+          gvf::readCommandLine("run_pipeline", kUsage, 1, [&] { return parseArguments(argc, argv, o); }))
   {
-    if (!parseArguments(argc, argv, o))
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-  }
-  catch (const gvf::UsageError& e)
-  {
-    return gvf::usageFailure("run_pipeline", e.what(), kUsage, 1);
+    return *status;
   }
   try
   {

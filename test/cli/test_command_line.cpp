@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,26 @@ TEST(CommandLine, ErrorsNameTheOptionAtFault)
   EXPECT_EQ(errorOf({"--tolerance", "0.5s"}), "--tolerance expects a number, got '0.5s'");
   EXPECT_EQ(errorOf({"--frames", "2.5"}), "--frames expects an integer, got '2.5'");
   EXPECT_EQ(errorOf({"stray"}, false), "unexpected argument 'stray'");
+}
+
+TEST(CommandLine, ReadCommandLineEndsTheToolOnHelpAndOnAUsageError)
+{
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(readCommandLine("tool", "USAGE\n", 7, [] { return false; }), std::optional<int>(0));
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "USAGE\n") << "--help: the usage on stdout";
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(readCommandLine("tool", "USAGE\n", 7, []() -> bool { throw UsageError("unknown option --x"); }),
+            std::optional<int>(7));
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "tool: unknown option --x\n\nUSAGE\n");
+
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(readCommandLine("tool", "USAGE\n", 7, [] { return true; }), std::nullopt) << "the tool goes on";
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <boost/program_options/options_description.hpp>
 #include <boost/program_options/value_semantic.hpp>
 #include <boost/program_options/variables_map.hpp>
+#include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,5 +39,28 @@ boost::program_options::variables_map parseCommandLine(
 /// The end of a tool's main on a usage error: writes "<tool>: <message>", a blank line and
 /// `usage` to stderr; returns `status` (the tool's exit status for usage errors).
 int usageFailure(const std::string& tool, const std::string& message, const std::string& usage, int status);
+
+/// The start of a tool's main: runs `parse`, which reads the command line and returns false when
+/// --help was asked for, or throws UsageError. Returns the status the tool ends with now: 0 after
+/// writing `usage` to stdout for --help, `usage_status` after usageFailure() for a usage error;
+/// nothing when the tool goes on.
+template <typename Parse>
+std::optional<int> readCommandLine(const std::string& tool, const std::string& usage, int usage_status,
+                                   Parse&& parse)
+{
+  try
+  {
+    if (parse())
+    {
+      return std::nullopt;
+    }
+    std::cout << usage;
+    return 0;
+  }
+  catch (const UsageError& e)
+  {
+    return usageFailure(tool, e.what(), usage, usage_status);
+  }
+}
 
 }  // namespace grid_vision_fusion
