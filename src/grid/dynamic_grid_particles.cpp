@@ -6,10 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <vector>
 
 #include "dynamic_grid_steps.h"
+#include "grid_vision_fusion/normal_quantile.h"
 
 namespace grid_vision_fusion
 {
@@ -43,42 +43,6 @@ enum Pass : std::uint32_t
   kPassBirth = 3,    // newborn particles
 };
 
-// The inverse of the standard normal CDF by Acklam's rational approximation (relative error
-// < 1.2e-9), p in (0, 1): the values of the normal table. Kept, rather than normalQuantile()
-// (include/grid_vision_fusion/normal_quantile.h, Boost.Math), so that the table and with it the
-// filter's output stay as they are: the more accurate Boost quantile differs in 574 of the 65536
-// floats of the table, by one ulp each (doc/decisions/0028-normal-table.md).
-double inverseNormalCdf(double p)
-{
-  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
-                             1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
-  static const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
-                             6.680131188771972e+01, -1.328068155288572e+01};
-  static const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
-                             -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
-  static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
-                             3.754408661907416e+00};
-  constexpr double kLow = 0.02425;
-  if (p <= 0.0 || p >= 1.0)
-  {
-    throw std::domain_error("inverseNormalCdf: p must be in (0, 1)");
-  }
-  if (p < kLow)
-  {
-    const double q = std::sqrt(-2.0 * std::log(p));
-    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
-           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
-  }
-  if (p > 1.0 - kLow)
-  {
-    return -inverseNormalCdf(1.0 - p);
-  }
-  const double q = p - 0.5;
-  const double r = q * q;
-  return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
-         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
-}
-
 inline float normalSample(BlockRandom& rng)
 {
   return normalTable()[rng.bits16()];
@@ -106,7 +70,7 @@ const std::vector<float>& normalTable()
     std::vector<float> t(kNormalTableSize);
     for (std::size_t i = 0; i < kNormalTableSize; ++i)
     {
-      t[i] = static_cast<float>(inverseNormalCdf((static_cast<double>(i) + 0.5) / kNormalTableSize));
+      t[i] = static_cast<float>(normalQuantile((static_cast<double>(i) + 0.5) / kNormalTableSize));
     }
     return t;
   }();
